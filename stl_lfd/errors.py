@@ -1,0 +1,103 @@
+"""Exceptions of stl_lfd.
+
+Every error a user can cause derives from `StlLfdError`; the command line turns each class
+into one line on stderr and its own exit code (`exit_code`), never a traceback.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class StlLfdError(Exception):
+    """Base class of all user-facing errors."""
+
+    exit_code = 1
+
+
+class SpecError(StlLfdError):
+    """An STL specification is malformed or does not fit the signals.
+
+    Attributes:
+        message: what is wrong, without the location.
+        source: the file (or `<string>`) the specification came from.
+        line, column: 1-based position of the offending text, 0 when unknown.
+        context: the offending source line with a caret under the column, or "".
+    """
+
+    exit_code = 3
+
+    def __init__(
+        self,
+        message: str,
+        source: str = "<string>",
+        line: int = 0,
+        column: int = 0,
+        context: str = "",
+    ) -> None:
+        self.message = message
+        self.source = source
+        self.line = line
+        self.column = column
+        self.context = context
+        super().__init__(str(self))
+
+    def located(self, source: str, text: str | None = None) -> "SpecError":
+        """A copy naming `source` and showing the offending line of `text` (default: the file)."""
+        context = self.context
+        if text is None and not context and self.line:
+            try:
+                text = Path(source).read_text()
+            except (OSError, UnicodeDecodeError):
+                text = None
+        if text is not None and self.line:
+            context = caret_context(text, self.line, self.column)
+        return type(self)(self.message, source, self.line, self.column, context)
+
+    def __str__(self) -> str:
+        where = self.source
+        if self.line:
+            where += f":{self.line}:{self.column}"
+        head = f"{where}: {self.message}"
+        return f"{head}\n{self.context}" if self.context else head
+
+
+class StlSyntaxError(SpecError):
+    """The text is not a well-formed specification (bad token, unbalanced brackets, ...)."""
+
+
+class StlNameError(SpecError):
+    """Undefined or recursive formula names, or signals the trace does not have."""
+
+
+class SignalError(StlLfdError):
+    """A signal or demonstration file (CSV) is missing, malformed or inconsistent."""
+
+    exit_code = 4
+
+
+class ConfigError(StlLfdError):
+    """A task, scene or behaviour file has an unknown key or a value that makes no sense."""
+
+    exit_code = 5
+
+
+class ModelError(StlLfdError):
+    """A skill model cannot be learned, loaded or used as asked."""
+
+    exit_code = 6
+
+
+class ExecutionError(StlLfdError):
+    """A rollout failed (simulator error, NaN in the trajectory, unreachable scene)."""
+
+    exit_code = 7
+
+
+def caret_context(text: str, line: int, column: int) -> str:
+    """The `line`-th line of `text` (1-based) and a caret under `column` (1-based)."""
+    lines = text.splitlines()
+    if not 1 <= line <= len(lines):
+        return ""
+    source_line = lines[line - 1].rstrip("\n")
+    return f"  {source_line}\n  {' ' * max(column - 1, 0)}^"

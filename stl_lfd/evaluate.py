@@ -1,0 +1,66 @@
+"""Robustness of a recorded signal file against a specification file (`stlopt robustness`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from stl_lfd.errors import SpecError
+from stl_lfd.signals import read_signal_csv
+from stl_lfd.stl import compile_spec, load_spec
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Result of evaluating one signal file.
+
+    Attributes:
+        robustness: value at the first sample (may be +-inf when every window is empty).
+        satisfied: robustness > 0.
+    """
+
+    spec: str
+    signal: str
+    semantics: str
+    nu: float | None
+    samples: int
+    duration: float
+    robustness: float
+
+    @property
+    def satisfied(self) -> bool:
+        return self.robustness > 0
+
+    def to_json(self) -> dict:
+        """A JSON-ready dict; an infinite robustness is written as null (JSON has no infinity)."""
+        return {
+            "robustness": self.robustness if math.isfinite(self.robustness) else None,
+            "satisfied": self.satisfied,
+            "semantics": self.semantics,
+            "nu": self.nu,
+            "samples": self.samples,
+            "duration": self.duration,
+            "spec": self.spec,
+            "signal": self.signal,
+        }
+
+
+def evaluate_file(spec_path: str | Path, signal_path: str | Path, semantics: str = "classic", nu: float = 1.0) -> Evaluation:
+    """Load, compile and evaluate; raises `StlLfdError` subclasses on bad input."""
+    spec = load_spec(spec_path)
+    function = compile_spec(spec, semantics, nu, source=str(spec_path))
+    table = read_signal_csv(signal_path)
+    try:
+        value = function(table.columns, table.times)
+    except SpecError as error:
+        raise error.located(error.source) from None
+    return Evaluation(
+        spec=str(spec_path),
+        signal=table.source,
+        semantics=semantics,
+        nu=nu if semantics == "new" else None,
+        samples=table.samples,
+        duration=table.duration,
+        robustness=value,
+    )

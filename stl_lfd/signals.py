@@ -1,0 +1,135 @@
+"""Signal CSV files: a header row, a time column `t` (s, strictly increasing) and one column per
+signal. Rollouts write them, `stlopt robustness` and the skill learner read them.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TextIO
+
+import numpy as np
+
+from stl_lfd.errors import SignalError
+
+TIME_COLUMN = "t"
+
+
+@dataclass
+class SignalTable:
+    """One recorded trace.
+
+    Attributes:
+        times: `T` sample times in seconds.
+        columns: signal name -> `T` array (the time column excluded).
+        source: where the table came from, for messages.
+    """
+
+    times: np.ndarray
+    columns: dict[str, np.ndarray]
+    source: str = field(default="<memory>")
+
+    @property
+    def samples(self) -> int:
+        return int(self.times.size)
+
+    @property
+    def duration(self) -> float:
+        return float(self.times[-1] - self.times[0]) if self.samples else 0.0
+
+
+def read_signal_csv(path: str | Path, required: tuple[str, ...] = ()) -> SignalTable:
+    """Read a signal CSV; `-` reads standard input.
+
+    Args:
+        path: file path or "-".
+        required: signal columns that must be present besides `t`.
+
+    Raises:
+        SignalError: naming the file, and the line and column of a bad cell.
+    """
+    shown = "<stdin>" if str(path) == "-" else str(path)
+    text = _read_text(path, shown)
+    rows = list(csv.reader(io.StringIO(text)))
+    while rows and not any(cell.strip() for cell in rows[-1]):
+        rows.pop()
+    if not rows:
+        raise SignalError(f"{shown}: the file is empty (expected a header row such as t,x,y,z)")
+    header = [name.strip() for name in rows[0]]
+    _check_header(header, required, shown)
+    if len(rows) < 2:
+        raise SignalError(f"{shown}: the file has a header but no samples")
+    data = _parse_rows(rows[1:], header, shown)
+    times = data[:, header.index(TIME_COLUMN)]
+    steps = np.diff(times)
+    if np.any(steps <= 0):
+        row = int(np.argmax(steps <= 0)) + 1
+        raise SignalError(
+            f"{shown}:{row + 2}: time must be strictly increasing (t = {times[row]:g} after {times[row - 1]:g})"
+        )
+    columns = {name: data[:, index].copy() for index, name in enumerate(header) if name != TIME_COLUMN}
+    return SignalTable(times.copy(), columns, shown)
+
+
+def write_signal_csv(table: SignalTable, destination: str | Path | TextIO) -> None:
+    """Write `table` as CSV (`t` first) to a path, "-" (standard output) or an open stream."""
+    names = list(table.columns)
+    data = np.column_stack([table.times] + [table.columns[name] for name in names])
+    body = io.StringIO()
+    body.write(",".join([TIME_COLUMN] + names) + "\n")
+    np.savetxt(body, data, delimiter=",", fmt="%.9g")
+    if isinstance(destination, (str, Path)) and str(destination) != "-":
+        Path(destination).write_text(body.getvalue())
+    else:
+        stream = sys.stdout if isinstance(destination, (str, Path)) else destination
+        stream.write(body.getvalue())
+
+
+# --- Helper functions -----------------------------------------------------------------------
+
+
+def _read_text(path: str | Path, shown: str) -> str:
+    if str(path) == "-":
+        return sys.stdin.read()
+    try:
+        return Path(path).read_text()
+    except FileNotFoundError:
+        raise SignalError(f"{shown}: no such file") from None
+    except IsADirectoryError:
+        raise SignalError(f"{shown}: is a folder, expected a CSV file") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise SignalError(f"{shown}: cannot read the file ({error})") from None
+
+
+def _check_header(header: list[str], required: tuple[str, ...], shown: str) -> None:
+    if any(not name for name in header):
+        raise SignalError(f"{shown}:1: empty column name in the header")
+    duplicates = sorted({name for name in header if header.count(name) > 1})
+    if duplicates:
+        raise SignalError(f"{shown}:1: duplicate column '{duplicates[0]}'")
+    missing = [name for name in (TIME_COLUMN, *required) if name not in header]
+    if missing:
+        raise SignalError(f"{shown}:1: missing column '{missing[0]}' (the header has: {', '.join(header)})")
+
+
+def _parse_rows(rows: list[list[str]], header: list[str], shown: str) -> np.ndarray:
+    data = np.empty((len(rows), len(header)))
+    for row_index, row in enumerate(rows):
+        line = row_index + 2
+        if len(row) != len(header):
+            raise SignalError(f"{shown}:{line}: expected {len(header)} values, found {len(row)}")
+        for column_index, cell in enumerate(row):
+            try:
+                value = float(cell)
+            except ValueError:
+                raise SignalError(
+                    f"{shown}:{line}: column '{header[column_index]}' has {cell.strip()!r}, not a number"
+                ) from None
+            if not math.isfinite(value):
+                raise SignalError(f"{shown}:{line}: column '{header[column_index]}' is {cell.strip()}")
+            data[row_index, column_index] = value
+    return data

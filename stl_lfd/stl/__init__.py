@@ -1,0 +1,19 @@
+"""STL specifications: parsing (`parse`, `load_spec`) and robustness (`compile_spec`)."""
+
+from stl_lfd.stl.parser import load_spec, parse, resolve
+from stl_lfd.stl.printer import format_formula, format_spec
+from stl_lfd.stl.robustness import SEMANTICS, HorizonWarning, Robustness, Semantics, compile_spec, horizon
+
+__all__ = [
+    "SEMANTICS",
+    "HorizonWarning",
+    "Robustness",
+    "Semantics",
+    "compile_spec",
+    "format_formula",
+    "format_spec",
+    "horizon",
+    "load_spec",
+    "parse",
+    "resolve",
+]

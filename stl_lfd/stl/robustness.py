@@ -1,0 +1,352 @@
+"""Compile STL formulas into vectorised robustness functions.
+
+    >>> from stl_lfd.stl import compile_spec, parse
+    >>> robustness = compile_spec(parse("F[0, 1] x > 0.5"), semantics="classic")
+    >>> robustness({"x": [0.0, 0.2, 0.9]}, times=[0.0, 0.5, 1.0])
+    0.4
+
+Every node compiles to an evaluator `(trace, start, stop) -> B x (stop - start)` that computes
+the node's robustness only at the samples [start, stop); a temporal operator asks its operands
+for just the samples its windows reach. The robustness of a trace is the value at its first
+sample, so most of a long trace is never evaluated by formulas with bounded windows.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from typing import Callable, Literal, Mapping
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from stl_lfd.errors import SignalError, SpecError, StlNameError
+from stl_lfd.stl import ast
+from stl_lfd.stl._numerics import (
+    classic_conjunction,
+    new_conjunction,
+    suffix_min,
+    until_windows,
+    window_min,
+    window_reduce,
+)
+from stl_lfd.stl.parser import resolve
+
+SemanticsName = Literal["classic", "new"]
+SEMANTICS: tuple[str, ...] = ("classic", "new")
+# Sample times within this of a window's end belong to the window.
+TIME_TOLERANCE = 1e-9
+# Sampling counts as uniform when every step is within this fraction of the mean step.
+UNIFORM_STEP_TOLERANCE = 0.01
+
+
+class HorizonWarning(UserWarning):
+    """A formula looks further ahead than the trace lasts; windows are clipped at its end."""
+
+
+@dataclass(frozen=True)
+class Semantics:
+    """Which robustness to compute: `classic` space robustness or `new` with sharpness `nu`."""
+
+    name: SemanticsName = "classic"
+    nu: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.name not in SEMANTICS:
+            raise SpecError(f"unknown semantics '{self.name}'; choose one of {', '.join(SEMANTICS)}")
+        if not (math.isfinite(self.nu) and self.nu > 0):
+            raise SpecError(f"nu must be a positive number (got {self.nu})")
+
+    @property
+    def conjunction(self) -> Callable[[np.ndarray, float], np.ndarray]:
+        return classic_conjunction if self.name == "classic" else new_conjunction
+
+
+@dataclass(frozen=True)
+class _Trace:
+    """Signals of a batch of equally long traces, uniformly sampled."""
+
+    signals: Mapping[str, np.ndarray]  # name -> B x T
+    elapsed: np.ndarray  # T: times since the first sample
+    batch: int
+
+    @property
+    def length(self) -> int:
+        return self.elapsed.size
+
+
+Evaluator = Callable[[_Trace, int, int], np.ndarray]
+
+
+class Robustness:
+    """The robustness function of one formula under one semantics.
+
+    Attributes:
+        formula: the formula, with defined names inlined.
+        semantics: the `Semantics` used.
+        signals: names of the signals the formula reads.
+        horizon: how far (s) the bounded windows look ahead of the first sample.
+    """
+
+    def __init__(self, formula: ast.Formula, semantics: Semantics, source: str = "<string>") -> None:
+        self.formula = formula
+        self.semantics = semantics
+        self.source = source
+        self.signals = frozenset(node.name for node in formula.walk() if isinstance(node, ast.Signal))
+        self.horizon = horizon(formula)
+        self._evaluate = _compile(formula, semantics)
+
+    def __call__(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> float | np.ndarray:
+        """Robustness at the first sample.
+
+        Args:
+            signals: name -> `T` or `B x T` array (a batch of B traces of equal length).
+            times: `T` sample times in seconds, uniformly spaced.
+
+        Returns:
+            a float for a single trace, a `B` array for a batch.
+        """
+        trace, batched = self._prepare(signals, times)
+        values = self._evaluate(trace, 0, 1)[:, 0]
+        return values if batched else float(values[0])
+
+    def trace(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> np.ndarray:
+        """The robustness signal at every sample: `T` or `B x T`."""
+        trace, batched = self._prepare(signals, times)
+        values = self._evaluate(trace, 0, trace.length)
+        return values if batched else values[0]
+
+    def _prepare(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> tuple[_Trace, bool]:
+        times = np.asarray(times, dtype=float)
+        arrays = {name: np.asarray(signals[name], dtype=float) for name in self.signals if name in signals}
+        missing = sorted(self.signals - arrays.keys())
+        if missing:
+            node = next(n for n in self.formula.walk() if isinstance(n, ast.Signal) and n.name == missing[0])
+            available = ", ".join(sorted(signals)) or "none"
+            raise StlNameError(
+                f"unknown signal '{node.name}' (the trace has: {available})", node.source, node.line, node.column
+            )
+        _check_times(times)
+        shapes = {array.shape for array in arrays.values()}
+        if len(shapes) > 1 or any(array.ndim not in (1, 2) or array.shape[-1] != times.size for array in arrays.values()):
+            raise SignalError(f"signals must all have shape (T,) or (B, T) with T = {times.size}; got {sorted(shapes)}")
+        batched = any(array.ndim == 2 for array in arrays.values())
+        batch = next(iter(shapes))[0] if batched else 1
+        arrays = {name: array.reshape(batch, times.size) for name, array in arrays.items()}
+        duration = float(times[-1] - times[0])
+        if self.horizon > duration + TIME_TOLERANCE:
+            warnings.warn(
+                HorizonWarning(
+                    f"{self.source}: the formula looks {self.horizon:g} s ahead but the trace lasts "
+                    f"{duration:g} s; windows are clipped at its end"
+                ),
+                stacklevel=3,
+            )
+        return _Trace(arrays, times - times[0], batch), batched
+
+
+def compile_spec(
+    spec: ast.Spec | ast.Formula, semantics: SemanticsName | Semantics = "classic", nu: float = 1.0, source: str = "<string>"
+) -> Robustness:
+    """Compile a parsed specification (or a formula) into its robustness function."""
+    if not isinstance(semantics, Semantics):
+        semantics = Semantics(semantics, nu)
+    formula = resolve(spec) if isinstance(spec, ast.Spec) else spec
+    return Robustness(formula, semantics, source)
+
+
+def horizon(node: ast.Node) -> float:
+    """Seconds beyond the first sample that the bounded windows of `node` reach."""
+    children = max((horizon(child) for child in node.children()), default=0.0)
+    interval = getattr(node, "interval", None)
+    return children + (interval.hi if interval is not None else 0.0)
+
+
+# --- Helper functions -----------------------------------------------------------------------
+
+
+def _check_times(times: np.ndarray) -> None:
+    if times.ndim != 1 or times.size == 0:
+        raise SignalError("sample times must be a non-empty 1-D array")
+    if times.size == 1:
+        return
+    steps = np.diff(times)
+    if not np.all(steps > 0):
+        index = int(np.argmax(steps <= 0)) + 1
+        raise SignalError(f"sample times must be strictly increasing (sample {index}: t = {times[index]:g} s)")
+    step = float(times[-1] - times[0]) / (times.size - 1)
+    if np.max(np.abs(steps - step)) > UNIFORM_STEP_TOLERANCE * step:
+        raise SignalError(
+            f"sample times are not uniform (steps from {steps.min():g} to {steps.max():g} s); resample the signal"
+        )
+
+
+def _window(interval: ast.Interval | None, trace: _Trace, start: int) -> tuple[int, int]:
+    """First and last sample offsets covered by `interval` (the whole rest of the trace if None).
+
+    Offsets are measured on the trace's own times from its first sample, so the window is exact
+    at the first sample; uniform sampling makes the same offsets right at every other sample.
+    An empty window comes back with last < first.
+    """
+    last = trace.length - 1 - start
+    if interval is None:
+        return 0, last
+    lo = int(np.searchsorted(trace.elapsed, interval.lo - TIME_TOLERANCE, side="left"))
+    hi = int(np.searchsorted(trace.elapsed, interval.hi + TIME_TOLERANCE, side="right")) - 1
+    return lo, min(hi, last)
+
+
+_COMPILERS: dict[type, Callable[[ast.Node, Semantics], Evaluator]] = {}
+
+
+def _handles(node_type: type):
+    def register(function):
+        _COMPILERS[node_type] = function
+        return function
+
+    return register
+
+
+def _compile(node: ast.Node, semantics: Semantics) -> Evaluator:
+    try:
+        compiler = _COMPILERS[type(node)]
+    except KeyError:
+        raise TypeError(f"cannot compile node of type {type(node).__name__}") from None
+    return compiler(node, semantics)
+
+
+@_handles(ast.Const)
+def _const(node: ast.Const, semantics: Semantics) -> Evaluator:
+    return lambda trace, start, stop: np.full((trace.batch, stop - start), node.value)
+
+
+@_handles(ast.Signal)
+def _signal(node: ast.Signal, semantics: Semantics) -> Evaluator:
+    return lambda trace, start, stop: trace.signals[node.name][:, start:stop]
+
+
+@_handles(ast.Minus)
+def _minus(node: ast.Minus, semantics: Semantics) -> Evaluator:
+    operand = _compile(node.operand, semantics)
+    return lambda trace, start, stop: -operand(trace, start, stop)
+
+
+@_handles(ast.Abs)
+def _abs(node: ast.Abs, semantics: Semantics) -> Evaluator:
+    operand = _compile(node.operand, semantics)
+    return lambda trace, start, stop: np.abs(operand(trace, start, stop))
+
+
+_ARITHMETIC = {
+    ast.ArithOp.ADD: np.add,
+    ast.ArithOp.SUB: np.subtract,
+    ast.ArithOp.MUL: np.multiply,
+    ast.ArithOp.DIV: np.divide,
+}
+
+
+@_handles(ast.Arith)
+def _arith(node: ast.Arith, semantics: Semantics) -> Evaluator:
+    left, right, operation = _compile(node.left, semantics), _compile(node.right, semantics), _ARITHMETIC[node.op]
+
+    def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return operation(left(trace, start, stop), right(trace, start, stop))
+
+    return evaluate
+
+
+@_handles(ast.Compare)
+def _compare(node: ast.Compare, semantics: Semantics) -> Evaluator:
+    greater = node.op in (ast.Comparator.GT, ast.Comparator.GE)
+    left, right = _compile(node.left, semantics), _compile(node.right, semantics)
+    if not greater:
+        left, right = right, left
+    return lambda trace, start, stop: left(trace, start, stop) - right(trace, start, stop)
+
+
+@_handles(ast.InRange)
+def _in_range(node: ast.InRange, semantics: Semantics) -> Evaluator:
+    expr = _compile(node.expr, semantics)
+    half_width, centre = (node.hi - node.lo) / 2, (node.hi + node.lo) / 2
+    return lambda trace, start, stop: half_width - np.abs(expr(trace, start, stop) - centre)
+
+
+@_handles(ast.Not)
+def _not(node: ast.Not, semantics: Semantics) -> Evaluator:
+    child = _compile(node.child, semantics)
+    return lambda trace, start, stop: -child(trace, start, stop)
+
+
+def _nary(operands: list[Evaluator], conjunction, nu: float, sign: float) -> Evaluator:
+    """Conjunction (sign +1) or, by De Morgan, disjunction (sign -1) of the operands."""
+
+    def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
+        stacked = np.stack([sign * operand(trace, start, stop) for operand in operands], axis=-1)
+        return sign * conjunction(stacked, nu)
+
+    return evaluate
+
+
+@_handles(ast.And)
+def _and(node: ast.And, semantics: Semantics) -> Evaluator:
+    operands = [_compile(operand, semantics) for operand in node.operands]
+    return _nary(operands, semantics.conjunction, semantics.nu, 1.0)
+
+
+@_handles(ast.Or)
+def _or(node: ast.Or, semantics: Semantics) -> Evaluator:
+    operands = [_compile(operand, semantics) for operand in node.operands]
+    return _nary(operands, semantics.conjunction, semantics.nu, -1.0)
+
+
+@_handles(ast.Implies)
+def _implies(node: ast.Implies, semantics: Semantics) -> Evaluator:
+    return _compile(ast.Or((ast.Not(node.left), node.right)), semantics)
+
+
+def _always_evaluator(child: Evaluator, interval: ast.Interval | None, semantics: Semantics, sign: float) -> Evaluator:
+    """`G` (sign +1) or, as `!G!`, `F` (sign -1) over `interval`."""
+
+    def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
+        lo, hi = _window(interval, trace, start)
+        count = stop - start
+        first, last = start + lo, min(stop - 1 + hi, trace.length - 1)
+        if hi < lo or first > last:
+            return np.full((trace.batch, count), sign * np.inf)
+        values = sign * child(trace, first, last + 1)
+        width = hi - lo + 1
+        if semantics.name == "classic":
+            reduced = suffix_min(values)[..., :count] if interval is None else window_min(values, width, count)
+        else:
+            reduced = window_reduce(values, width, count, semantics.conjunction, semantics.nu)
+        return sign * reduced
+
+    return evaluate
+
+
+@_handles(ast.Always)
+def _always(node: ast.Always, semantics: Semantics) -> Evaluator:
+    return _always_evaluator(_compile(node.child, semantics), node.interval, semantics, 1.0)
+
+
+@_handles(ast.Eventually)
+def _eventually(node: ast.Eventually, semantics: Semantics) -> Evaluator:
+    return _always_evaluator(_compile(node.child, semantics), node.interval, semantics, -1.0)
+
+
+@_handles(ast.Until)
+def _until(node: ast.Until, semantics: Semantics) -> Evaluator:
+    left, right = _compile(node.left, semantics), _compile(node.right, semantics)
+
+    def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
+        lo, hi = _window(node.interval, trace, start)
+        count = stop - start
+        last = min(stop - 1 + hi, trace.length - 1)
+        if hi < lo or start + lo > last:
+            return np.full((trace.batch, count), -np.inf)
+        lefts, rights = left(trace, start, last + 1), right(trace, start, last + 1)
+        return until_windows(lefts, rights, lo, hi + 1, count, semantics.conjunction, semantics.nu)
+
+    return evaluate
