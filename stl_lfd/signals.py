@@ -81,7 +81,7 @@ def write_signal_csv(table: SignalTable, destination: str | Path | TextIO) -> No
     data = np.column_stack([table.times] + [table.columns[name] for name in names])
     body = io.StringIO()
     body.write(",".join([TIME_COLUMN] + names) + "\n")
-    np.savetxt(body, data, delimiter=",", fmt="%.9g")
+    np.savetxt(body, data, delimiter=",", fmt="%.12g")
     if isinstance(destination, (str, Path)) and str(destination) != "-":
         Path(destination).write_text(body.getvalue())
     else:

@@ -1,0 +1,103 @@
+"""The command line: output on stdout, messages on stderr, exit codes, help for every command."""
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.core import TyperGroup
+from typer.main import get_command
+from typer.testing import CliRunner
+
+from stl_lfd.cli import app
+from tests.conftest import ROOT
+
+runner = CliRunner()
+EXAMPLE = str(ROOT / "specs" / "example.stl")
+S1, S2 = str(ROOT / "examples" / "s1.csv"), str(ROOT / "examples" / "s2.csv")
+THREE_REGIONS = str(ROOT / "examples" / "three_regions.csv")
+
+
+def invoke(*args: str, stdin: str | None = None):
+    return runner.invoke(app, list(args), input=stdin)
+
+
+def test_every_command_has_help():
+    command = get_command(app)
+    assert isinstance(command, TyperGroup)
+    for name, subcommand in command.commands.items():
+        assert subcommand.help and len(subcommand.help) > 40, name
+        result = invoke(name, "--help")
+        assert result.exit_code == 0 and "Usage" in result.stdout
+
+
+def test_robustness_reproduces_the_papers_example():
+    satisfied = invoke("robustness", EXAMPLE, S1)
+    assert satisfied.exit_code == 0
+    assert float(satisfied.stdout) == pytest.approx(0.1)
+    assert satisfied.stderr.strip() == "satisfied"
+    violated = invoke("robustness", EXAMPLE, S2)
+    assert float(violated.stdout) == pytest.approx(-0.05)
+    assert violated.stderr.strip() == "violated"
+
+
+def test_robustness_json_and_stdin():
+    result = invoke("robustness", EXAMPLE, "-", "--semantics", "new", "--nu", "2", "--json", stdin=Path(S1).read_text())
+    assert result.exit_code == 0
+    report = json.loads(result.stdout)
+    assert report["satisfied"] is True and report["semantics"] == "new" and report["nu"] == 2.0
+    assert report["samples"] == 851 and 0 < report["robustness"] < 0.2
+
+
+@pytest.mark.parametrize("spec", ["phi1", "phi2"])
+def test_demonstrated_path_violates_phi1_and_phi2(spec):
+    for semantics in ("classic", "new"):
+        result = invoke("robustness", str(ROOT / "specs" / f"{spec}.stl"), THREE_REGIONS, "--semantics", semantics, "--json")
+        assert json.loads(result.stdout)["satisfied"] is False
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("phi := F[1, 2 s > 0\n", "spec.stl:1:15: unexpected 's'"),
+        ("phi := F q > 0\n", "spec.stl:1:10: unknown signal 'q' (the trace has: s)"),
+        ("phi := F B\n", "spec.stl:1:10: undefined formula 'B'"),
+        ("A := F B\nB := G A\n", "spec.stl:1:1: recursive definition: A -> B -> A"),
+        ("phi := F[5, 2] s > 0\n", "spec.stl:1:10: empty interval [5, 2]"),
+        ("phi := G[-1, 2] s > 0\n", "spec.stl:1:10: interval bounds must be non-negative"),
+    ],
+)
+def test_spec_errors_through_the_cli(tmp_path: Path, text, message):
+    spec = tmp_path / "spec.stl"
+    spec.write_text(text)
+    result = invoke("robustness", str(spec), S1)
+    assert result.exit_code == 3
+    assert result.stdout == ""
+    first, source_line, caret = result.stderr.splitlines()
+    assert first.startswith("error: ") and message in first
+    assert source_line.strip() == text.splitlines()[int(first.split(":")[2]) - 1].strip()
+    assert caret.strip() == "^"
+    assert "Traceback" not in result.stderr
+
+
+def test_signal_errors_through_the_cli(tmp_path: Path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,s\n0,0.1\n1,nan\n")
+    result = invoke("robustness", EXAMPLE, str(bad))
+    assert result.exit_code == 4
+    assert result.stderr.strip() == f"error: {bad}:3: column 's' is nan"
+    missing = invoke("robustness", EXAMPLE, str(tmp_path / "none.csv"))
+    assert missing.exit_code == 4 and "no such file" in missing.stderr
+
+
+def test_bad_options_are_usage_errors():
+    assert invoke("robustness", EXAMPLE, S1, "--semantics", "fuzzy").exit_code == 2
+    result = invoke("robustness", EXAMPLE, S1, "--semantics", "new", "--nu", "-1")
+    assert result.exit_code == 3 and "nu must be a positive number" in result.stderr
+
+
+def test_horizon_warning_goes_to_stderr(tmp_path: Path):
+    spec = tmp_path / "long.stl"
+    spec.write_text("phi := G[0, 30] s > 0\n")
+    result = invoke("robustness", str(spec), S1)
+    assert result.exit_code == 0
+    assert "warning:" in result.stderr and "looks 30 s ahead" in result.stderr
