@@ -13,6 +13,7 @@ sample, so most of a long trace is never evaluated by formulas with bounded wind
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass
@@ -26,7 +27,6 @@ from stl_lfd.stl import ast
 from stl_lfd.stl._numerics import (
     classic_conjunction,
     new_conjunction,
-    suffix_min,
     until_windows,
     window_min,
     window_reduce,
@@ -279,26 +279,37 @@ def _not(node: ast.Not, semantics: Semantics) -> Evaluator:
     return lambda trace, start, stop: -child(trace, start, stop)
 
 
-def _nary(operands: list[Evaluator], conjunction, nu: float, sign: float) -> Evaluator:
-    """Conjunction (sign +1) or, by De Morgan, disjunction (sign -1) of the operands."""
+def _nary(operands: list[Evaluator], semantics: Semantics, sign: float) -> Evaluator:
+    """Conjunction (sign +1) or disjunction (sign -1) of the operands.
 
-    def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
+    Classic chains reduce pairwise (no stacked copy); the new conjunction needs all operands
+    at once, and its disjunction is `!(!a & !b & ...)`.
+    """
+    if semantics.name == "classic":
+        pairwise = np.minimum if sign > 0 else np.maximum
+
+        def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
+            return functools.reduce(pairwise, (operand(trace, start, stop) for operand in operands))
+
+        return evaluate
+
+    def evaluate_new(trace: _Trace, start: int, stop: int) -> np.ndarray:
         stacked = np.stack([sign * operand(trace, start, stop) for operand in operands], axis=-1)
-        return sign * conjunction(stacked, nu)
+        return sign * new_conjunction(stacked, semantics.nu)
 
-    return evaluate
+    return evaluate_new
 
 
 @_handles(ast.And)
 def _and(node: ast.And, semantics: Semantics) -> Evaluator:
     operands = [_compile(operand, semantics) for operand in node.operands]
-    return _nary(operands, semantics.conjunction, semantics.nu, 1.0)
+    return _nary(operands, semantics, 1.0)
 
 
 @_handles(ast.Or)
 def _or(node: ast.Or, semantics: Semantics) -> Evaluator:
     operands = [_compile(operand, semantics) for operand in node.operands]
-    return _nary(operands, semantics.conjunction, semantics.nu, -1.0)
+    return _nary(operands, semantics, -1.0)
 
 
 @_handles(ast.Implies)
@@ -318,7 +329,7 @@ def _always_evaluator(child: Evaluator, interval: ast.Interval | None, semantics
         values = sign * child(trace, first, last + 1)
         width = hi - lo + 1
         if semantics.name == "classic":
-            reduced = suffix_min(values)[..., :count] if interval is None else window_min(values, width, count)
+            reduced = window_min(values, width, count)
         else:
             reduced = window_reduce(values, width, count, semantics.conjunction, semantics.nu)
         return sign * reduced

@@ -1,0 +1,11 @@
+"""`make bench`: run every benchmark and print its table."""
+
+from benchmarks import bench_stl
+
+
+def main() -> None:
+    bench_stl.main()
+
+
+if __name__ == "__main__":
+    main()
