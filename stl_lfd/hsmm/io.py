@@ -1,0 +1,62 @@
+"""Model files: one self-describing `.npz` holding every learned attribute of an `HSMM`."""
+
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from stl_lfd.errors import ModelError
+from stl_lfd.hsmm.model import HSMM
+
+FORMAT = "stlopt-hsmm"
+FORMAT_VERSION = 1
+_ARRAYS = ("means_", "covars_", "duration_means_", "duration_stds_", "transmat_", "startprob_")
+
+
+def save_model(model: HSMM, path: str | Path) -> None:
+    """Write `model` to `path` (.npz); written to a temporary file first, then renamed."""
+    model._check()
+    path = Path(path)
+    temporary = path.with_name(path.name + ".tmp.npz")
+    np.savez(
+        temporary,
+        format=FORMAT,
+        format_version=FORMAT_VERSION,
+        n_states=model.n_states,
+        sample_period=model.sample_period_,
+        signal_names=np.array(model.signal_names_),
+        **{name.rstrip("_"): np.asarray(getattr(model, name)) for name in _ARRAYS},
+    )
+    temporary.replace(path)
+
+
+def load_model(path: str | Path) -> HSMM:
+    """Read a model file written by `save_model` (any version up to the current one)."""
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            fields = {name: data[name] for name in data.files}
+    except FileNotFoundError:
+        raise ModelError(f"{path}: no such model file") from None
+    except (OSError, ValueError, zipfile.BadZipFile) as error:
+        raise ModelError(f"{path}: not a model file ({error})") from None
+    if str(fields.get("format", "")) != FORMAT:
+        raise ModelError(f"{path}: not an stlopt model file (no '{FORMAT}' marker)")
+    version = int(fields["format_version"])
+    if version > FORMAT_VERSION:
+        raise ModelError(f"{path}: model format version {version} is newer than this stlopt understands ({FORMAT_VERSION}); upgrade stlopt")
+    missing = [name for name in _ARRAYS if name.rstrip("_") not in fields]
+    if missing:
+        raise ModelError(f"{path}: the model file lacks '{missing[0].rstrip('_')}'")
+    model = HSMM(n_states=int(fields["n_states"]))
+    for name in _ARRAYS:
+        setattr(model, name, np.array(fields[name.rstrip("_")], dtype=float))
+    model.sample_period_ = float(fields["sample_period"])
+    model.signal_names_ = [str(name) for name in fields["signal_names"]]
+    try:
+        model._check()
+    except ModelError as error:
+        raise ModelError(f"{path}: {error}") from None
+    return model

@@ -1,0 +1,51 @@
+"""Learning a skill model from a folder of demonstrations, and its summary."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from stl_lfd.errors import ModelError
+from stl_lfd.hsmm.demos import load_demos, median_period, resample
+from stl_lfd.hsmm.model import HSMM
+
+
+def learn_from_folder(folder: str | Path, n_states: int = 6, sample_period: float | None = None) -> tuple[HSMM, list[np.ndarray]]:
+    """Load, resample to one period (default: the demos' median period) and fit.
+
+    Returns:
+        the fitted model and the resampled demonstrations (`T_i x D` each).
+    """
+    if n_states < 1:
+        raise ModelError(f"K must be at least 1 (got {n_states})")
+    demos = load_demos(folder)
+    period = median_period(demos) if sample_period is None else sample_period
+    sequences = [resample(demo, period) for demo in demos]
+    shortest = min(len(sequence) for sequence in sequences)
+    if shortest < 2 * n_states:
+        raise ModelError(
+            f"{folder}: K = {n_states} needs at least {2 * n_states} samples per demonstration "
+            f"(the shortest has {shortest} after resampling); use a smaller K"
+        )
+    model = HSMM(n_states=n_states)
+    model.fit(np.concatenate(sequences), np.array([len(s) for s in sequences]), period, list(demos[0].columns))
+    return model, sequences
+
+
+def summary_rows(model: HSMM) -> list[dict]:
+    """Per state: mean position, duration mean and std (s), most likely successor."""
+    transmat = model.normalized_transmat()
+    rows = []
+    for k in range(model.n_states):
+        successor = int(np.argmax(transmat[k])) + 1 if transmat[k].sum() > 0 else None
+        rows.append(
+            {
+                "state": k + 1,
+                "mean": {name: float(value) for name, value in zip(model.signal_names_, model.means_[k])},
+                "duration_mean": float(model.duration_means_[k]),
+                "duration_std": float(model.duration_stds_[k]),
+                "successor": successor,
+            }
+        )
+    return rows

@@ -1,0 +1,112 @@
+"""Linear quadratic tracking by the backward Riccati recursion.
+
+Minimises  sum_t (x_t - m_t)^T Q_t (x_t - m_t) + sum_t u_t^T R u_t  subject to
+x_{t+1} = A x_t + B u_t and a given x_0. The value function is V_t(x) = x^T P_t x - 2 p_t^T x
++ const, with
+    L_t = (R + B^T P_{t+1} B)^{-1},  K_t = L_t B^T P_{t+1} A,  k_t = L_t B^T p_{t+1},
+    P_t = Q_t + A^T P_{t+1} (A - B K_t),  p_t = Q_t m_t + (A - B K_t)^T p_{t+1},
+and the optimal control u_t = -K_t x_t + k_t.
+
+Tracking targets are piecewise constant (one per HSMM state), so (P_t, p_t) reach the fixed
+point of each segment's recursion after a few dozen steps; from there the step is skipped and
+the converged values are reused, which makes the recursion cost scale with the number of
+segments rather than the horizon.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Relative change below which the Riccati recursion counts as converged inside a segment.
+_CONVERGED = 1e-12
+
+
+def double_integrator(dimension: int, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Discrete double integrator, state [position; velocity], control = acceleration.
+
+    Returns:
+        A: `2d x 2d`, B: `2d x d`.
+    """
+    identity = np.eye(dimension)
+    zeros = np.zeros((dimension, dimension))
+    A = np.block([[identity, dt * identity], [zeros, identity]])
+    B = np.vstack([0.5 * dt**2 * identity, dt * identity])
+    return A, B
+
+
+def solve(
+    A: np.ndarray,
+    B: np.ndarray,
+    Q: np.ndarray,
+    R: np.ndarray,
+    targets: np.ndarray,
+    x0: np.ndarray,
+    segment_ids: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Optimal tracking trajectory.
+
+    Args:
+        A: `n x n` dynamics, B: `n x m` input matrix.
+        Q: `T x n x n` state costs (or `S x n x n` with `segment_ids`).
+        R: `m x m` control cost (positive definite).
+        targets: `T x n` tracked states (or `S x n` with `segment_ids`).
+        x0: `n` initial state.
+        segment_ids: optional `T` integer array mapping each step to a row of `Q`/`targets`;
+            consecutive equal ids form a segment whose converged recursion is reused.
+
+    Returns:
+        states: `T x n` trajectory (states[0] = x0), controls: `(T - 1) x m`.
+    """
+    steps = targets.shape[0] if segment_ids is None else segment_ids.size
+    ids = np.arange(steps) if segment_ids is None else segment_ids
+    gains, offsets = _backward(A, B, Q, R, targets, ids)
+    states = np.empty((steps, A.shape[0]))
+    controls = np.empty((steps - 1, B.shape[1]))
+    states[0] = x0
+    closed_loop = A - B @ gains  # (T-1) x n x n
+    drive = np.einsum("nm,tm->tn", B, offsets)  # (T-1) x n
+    for t in range(steps - 1):
+        states[t + 1] = closed_loop[t] @ states[t] + drive[t]
+    controls[:] = offsets - np.einsum("tmn,tn->tm", gains, states[:-1])
+    return states, controls
+
+
+def _backward(
+    A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray, targets: np.ndarray, ids: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Feedback gains `(T-1) x m x n` and feedforward terms `(T-1) x m`."""
+    steps = ids.size
+    n, m = B.shape
+    gains = np.empty((steps - 1, m, n))
+    offsets = np.empty((steps - 1, m))
+    P = Q[ids[-1]].copy()
+    p = Q[ids[-1]] @ targets[ids[-1]]
+    t = steps - 2
+    while t >= 0:
+        segment = ids[t]
+        Q_t, q_t = Q[segment], Q[segment] @ targets[segment]
+        first = t
+        while first > 0 and ids[first - 1] == segment:
+            first -= 1
+        while t >= first:
+            PB = P @ B
+            inverse = np.linalg.inv(R + B.T @ PB)
+            gains[t] = inverse @ PB.T @ A
+            offsets[t] = inverse @ (B.T @ p)
+            closed = A - B @ gains[t]
+            P_next = Q_t + A.T @ P @ closed
+            P_next = 0.5 * (P_next + P_next.T)  # rounding makes P drift from symmetry, then diverge
+            p_next = q_t + closed.T @ p
+            steady = _unchanged(P_next, P) and _unchanged(p_next, p)
+            P, p = P_next, p_next
+            t -= 1
+            if steady and t >= first:
+                # Fixed point reached: every earlier step of the segment is the same.
+                gains[first : t + 1] = gains[t + 1]
+                offsets[first : t + 1] = offsets[t + 1]
+                t = first - 1
+    return gains, offsets
+
+
+def _unchanged(new: np.ndarray, old: np.ndarray) -> bool:
+    return float(np.max(np.abs(new - old))) <= _CONVERGED * (1.0 + float(np.max(np.abs(old))))

@@ -1,0 +1,292 @@
+"""Hidden semi-Markov model with Gaussian emissions and Gaussian state durations.
+
+Follows hmmlearn's conventions: `__init__` stores hyperparameters only, `fit(X, lengths)`
+learns the attributes ending in `_` and returns `self`, several sequences are passed
+concatenated with their `lengths`, and `_check()` validates the parameters before use.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.stats import multivariate_normal
+
+from stl_lfd.errors import ModelError
+from stl_lfd.hsmm._forward import duration_pmf, hmm_posteriors, state_occupancy
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass
+class ConvergenceMonitor:
+    """Log-likelihood history of EM; `converged` once an iteration gains less than `tol`."""
+
+    tol: float
+    n_iter: int
+    history: list[float] = field(default_factory=list)
+
+    def report(self, log_likelihood: float) -> None:
+        logger.debug("EM iteration %d: log-likelihood %.6f", len(self.history) + 1, log_likelihood)
+        self.history.append(log_likelihood)
+
+    @property
+    def converged(self) -> bool:
+        if len(self.history) >= self.n_iter:
+            return True
+        return len(self.history) >= 2 and self.history[-1] - self.history[-2] < self.tol
+
+
+class HSMM:
+    """Skill model: K Gaussian states, a transition matrix without self-transitions, and a
+    Gaussian duration per state.
+
+    Hyperparameters:
+        n_states: K.
+        n_iter, tol: EM iteration limit and log-likelihood gain that stops it.
+        reg_covar: added to the diagonal of every covariance (units of the signals squared).
+
+    Learned attributes (plain arrays, free to modify before `state_sequence` or retrieval):
+        means_: `K x D` state means.
+        covars_: `K x D x D` state covariances.
+        duration_means_, duration_stds_: `K` duration mean and standard deviation, seconds.
+        transmat_: `K x K` transition probabilities, zero diagonal; a row of zeros marks a final
+            state. Rows are normalised where they are used, so any non-negative values work.
+        startprob_: `K` initial distribution.
+        sample_period_: seconds between samples of the data the model was fitted on.
+        signal_names_: the D signal names.
+    """
+
+    def __init__(self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-3, reg_covar: float = 1e-6) -> None:
+        self.n_states = n_states
+        self.n_iter = n_iter
+        self.tol = tol
+        self.reg_covar = reg_covar
+
+    # --- learning -------------------------------------------------------------------------
+
+    def fit(self, X: np.ndarray, lengths: np.ndarray, sample_period: float, signal_names: list[str] | None = None) -> "HSMM":
+        """Learn the model from demonstrations.
+
+        Args:
+            X: `N x D` samples of all demonstrations, concatenated.
+            lengths: samples per demonstration (sums to N).
+            sample_period: seconds between samples (all demonstrations share it).
+            signal_names: names of the D columns.
+
+        Recipe: k-bins initialisation, left-right HMM Baum-Welch with covariance
+        regularisation, self-transitions removed, then a Gaussian duration per state from the
+        segment lengths of the most likely state at each sample.
+        """
+        X = np.asarray(X, dtype=float)
+        lengths = np.asarray(lengths, dtype=int)
+        self._check_data(X, lengths)
+        self.sample_period_ = float(sample_period)
+        self.signal_names_ = list(signal_names) if signal_names is not None else [f"s{i}" for i in range(X.shape[1])]
+        sequences = np.split(X, np.cumsum(lengths)[:-1])
+        self._init_kbins(sequences)
+        padded = _pad(sequences)
+        self.monitor_ = ConvergenceMonitor(self.tol, self.n_iter)
+        transmat = self._left_right_start(lengths)
+        valid = np.arange(padded.shape[1])[None, :] < lengths[:, None]
+        while True:
+            likelihood, log_scale = self._frame_likelihood(padded)
+            gamma, xi_sum, log_likelihood = hmm_posteriors(self.startprob_, transmat, likelihood, lengths)
+            self.monitor_.report(float(log_likelihood.sum() + log_scale[valid].sum()))
+            transmat = self._m_step(padded, gamma, xi_sum, lengths)
+            if self.monitor_.converged:
+                break
+        self._set_transitions(transmat)
+        self._fit_durations(gamma, lengths)
+        self._check()
+        return self
+
+    def predict(self, X: np.ndarray, lengths: np.ndarray | None = None) -> np.ndarray:
+        """Most likely state at each sample (HMM posteriors with self-transitions restored
+        from the duration means), `N` integers."""
+        self._check()
+        X = np.asarray(X, dtype=float)
+        lengths = np.array([len(X)]) if lengths is None else np.asarray(lengths, dtype=int)
+        padded = _pad(np.split(X, np.cumsum(lengths)[:-1]))
+        gamma, _, _ = hmm_posteriors(self.startprob_, self._hmm_transmat(), self._frame_likelihood(padded)[0], lengths)
+        return np.concatenate([gamma[b, : lengths[b]].argmax(axis=1) for b in range(len(lengths))])
+
+    # --- generation ------------------------------------------------------------------------
+
+    def state_sequence(self, steps: int, dt: float | None = None) -> np.ndarray:
+        """Most likely state at each of `steps` steps of `dt` seconds (default the model's
+        sample period), from the explicit-duration forward variable without observations."""
+        return self.state_probabilities(steps, dt).argmax(axis=1)
+
+    def state_probabilities(self, steps: int, dt: float | None = None) -> np.ndarray:
+        """`steps x K` probabilities of being in each state (rows sum to 1)."""
+        self._check()
+        dt = self.sample_period_ if dt is None else dt
+        means, stds = self.duration_means_ / dt, np.maximum(self.duration_stds_ / dt, 1.0)
+        max_steps = int(np.ceil(np.max(means + 4 * stds))) + 1
+        pmf = duration_pmf(means, stds, max_steps)
+        return state_occupancy(self.startprob_, self.normalized_transmat(), pmf, steps)
+
+    def expected_duration(self) -> float:
+        """Seconds the nominal state sequence takes: the duration means along the most likely
+        successors from the most likely first state."""
+        self._check()
+        transmat = self.normalized_transmat()
+        state, total, seen = int(np.argmax(self.startprob_)), 0.0, set()
+        while state not in seen:
+            seen.add(state)
+            total += float(self.duration_means_[state])
+            if transmat[state].sum() <= 0:
+                break
+            state = int(np.argmax(transmat[state]))
+        return total
+
+    def sample(self, duration: float, random_state: int | np.random.Generator | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Draw one sequence of `duration` seconds at the model's sample period.
+
+        Returns:
+            X: `T x D` samples, states: `T` state indices.
+        """
+        self._check()
+        rng = np.random.default_rng(random_state)
+        steps = int(round(duration / self.sample_period_))
+        transmat = self.normalized_transmat()
+        states = np.empty(steps, dtype=int)
+        state, t = rng.choice(self.n_states, p=self.startprob_), 0
+        while t < steps:
+            length = max(1, int(round(rng.normal(self.duration_means_[state], self.duration_stds_[state]) / self.sample_period_)))
+            states[t : t + length] = state
+            t += length
+            if transmat[state].sum() > 0:
+                state = rng.choice(self.n_states, p=transmat[state])
+        X = np.array([rng.multivariate_normal(self.means_[k], self.covars_[k]) for k in states])
+        return X, states
+
+    # --- parameters ------------------------------------------------------------------------
+
+    def normalized_transmat(self) -> np.ndarray:
+        """`transmat_` with negative entries clipped and non-zero rows scaled to sum to 1."""
+        transmat = np.clip(np.asarray(self.transmat_, dtype=float), 0.0, None)
+        totals = transmat.sum(axis=1, keepdims=True)
+        return np.divide(transmat, totals, out=np.zeros_like(transmat), where=totals > 0)
+
+    def _check(self) -> None:
+        for name in ("means_", "covars_", "duration_means_", "duration_stds_", "transmat_", "startprob_", "sample_period_", "signal_names_"):
+            if not hasattr(self, name):
+                raise ModelError(f"the model has no {name}: fit it or load a model file first")
+        K, D = np.shape(self.means_)
+        expected = {
+            "covars_": (K, D, D),
+            "duration_means_": (K,),
+            "duration_stds_": (K,),
+            "transmat_": (K, K),
+            "startprob_": (K,),
+        }
+        for name, shape in expected.items():
+            if np.shape(getattr(self, name)) != shape:
+                raise ModelError(f"{name} must have shape {shape} (got {np.shape(getattr(self, name))})")
+        arrays = [self.means_, self.covars_, self.duration_means_, self.duration_stds_, self.transmat_, self.startprob_]
+        if not all(np.all(np.isfinite(a)) for a in arrays):
+            raise ModelError("model parameters contain NaN or infinity")
+        if np.any(np.asarray(self.duration_means_) <= 0) or np.any(np.asarray(self.duration_stds_) <= 0):
+            raise ModelError(f"duration means and stds must be positive (got means {np.round(self.duration_means_, 3)})")
+        if len(self.signal_names_) != D:
+            raise ModelError(f"signal_names_ must name the {D} signals (got {list(self.signal_names_)})")
+        if not np.isclose(np.sum(self.startprob_), 1.0):
+            raise ModelError(f"startprob_ must sum to 1 (got {np.sum(self.startprob_):.6g})")
+
+    @property
+    def n_features(self) -> int:
+        return int(np.shape(self.means_)[1])
+
+    # --- EM internals ----------------------------------------------------------------------
+
+    def _check_data(self, X: np.ndarray, lengths: np.ndarray) -> None:
+        if X.ndim != 2 or lengths.sum() != len(X):
+            raise ModelError(f"lengths {lengths.tolist()} do not sum to {len(X)} samples")
+        shortest = int(lengths.min())
+        if shortest < self.n_states:
+            raise ModelError(
+                f"K = {self.n_states} states need demonstrations of at least {self.n_states} samples "
+                f"(the shortest has {shortest}); use a smaller K"
+            )
+
+    def _init_kbins(self, sequences: list[np.ndarray]) -> None:
+        K, D = self.n_states, sequences[0].shape[1]
+        bins = [np.array_split(sequence, K) for sequence in sequences]
+        self.means_ = np.array([np.concatenate([b[k] for b in bins]).mean(axis=0) for k in range(K)])
+        covars = []
+        for k in range(K):
+            pooled = np.concatenate([b[k] for b in bins])
+            covars.append(np.atleast_2d(np.cov(pooled.T, bias=True)) if len(pooled) > 1 else np.zeros((D, D)))
+        self.covars_ = np.array(covars) + self.reg_covar * np.eye(D)
+        self.startprob_ = np.eye(K)[0]
+
+    def _left_right_start(self, lengths: np.ndarray) -> np.ndarray:
+        K = self.n_states
+        leave = min(0.5, K / float(np.mean(lengths)))
+        transmat = np.eye(K) * (1 - leave) + np.eye(K, k=1) * leave
+        transmat[-1, -1] = 1.0
+        return transmat
+
+    def _frame_likelihood(self, padded: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`B x T x K` Gaussian likelihoods divided by their largest value per frame, and the
+        `B x T` logs of those divisors (which the log-likelihood adds back)."""
+        log_likelihood = np.stack(
+            [multivariate_normal(self.means_[k], self.covars_[k], allow_singular=True).logpdf(padded) for k in range(self.n_states)],
+            axis=-1,
+        ).reshape(padded.shape[0], padded.shape[1], self.n_states)
+        log_scale = log_likelihood.max(axis=-1)
+        return np.exp(log_likelihood - log_scale[..., None]), log_scale
+
+    def _m_step(self, padded: np.ndarray, gamma: np.ndarray, xi_sum: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+        D = padded.shape[-1]
+        weights = gamma.sum(axis=(0, 1))  # K
+        safe = np.maximum(weights, 1e-12)
+        self.means_ = np.einsum("btk,btd->kd", gamma, padded) / safe[:, None]
+        centred = padded[:, :, None, :] - self.means_[None, None]  # B x T x K x D
+        self.covars_ = np.einsum("btk,btkd,btke->kde", gamma, centred, centred) / safe[:, None, None]
+        self.covars_ += self.reg_covar * np.eye(D)
+        transmat = xi_sum / np.maximum(xi_sum.sum(axis=1, keepdims=True), 1e-300)
+        starts = gamma[:, 0].sum(axis=0)
+        self.startprob_ = starts / starts.sum()
+        return transmat
+
+    def _set_transitions(self, hmm_transmat: np.ndarray) -> None:
+        transmat = hmm_transmat * (1 - np.eye(self.n_states))
+        totals = transmat.sum(axis=1, keepdims=True)
+        self.transmat_ = np.divide(transmat, totals, out=np.zeros_like(transmat), where=totals > 1e-8)
+
+    def _fit_durations(self, gamma: np.ndarray, lengths: np.ndarray) -> None:
+        """Duration mean and std (s) from the runs of the most likely state in each demo."""
+        runs: list[list[int]] = [[] for _ in range(self.n_states)]
+        for b, length in enumerate(lengths):
+            labels = gamma[b, :length].argmax(axis=1)
+            boundaries = np.flatnonzero(np.diff(labels)) + 1
+            for segment in np.split(labels, boundaries):
+                runs[segment[0]].append(len(segment))
+        all_runs = [run for state_runs in runs for run in state_runs]
+        means, stds = np.empty(self.n_states), np.empty(self.n_states)
+        for k, state_runs in enumerate(runs):
+            sample = np.array(state_runs or [np.mean(all_runs)], dtype=float)
+            means[k] = sample.mean()
+            stds[k] = np.sqrt(max(sample.var(), 1.0))  # variance floor of one step squared
+            if not state_runs:
+                logger.warning("state %d is never the most likely one in the demonstrations", k)
+        self.duration_means_ = means * self.sample_period_
+        self.duration_stds_ = stds * self.sample_period_
+
+    def _hmm_transmat(self) -> np.ndarray:
+        """Equivalent HMM transition matrix: self-transition 1 - 1/duration mean (steps)."""
+        stay = 1 - self.sample_period_ / np.maximum(self.duration_means_, self.sample_period_)
+        transmat = self.normalized_transmat() * (1 - stay)[:, None]
+        final = transmat.sum(axis=1) == 0
+        transmat[np.arange(self.n_states), np.arange(self.n_states)] = np.where(final, 1.0, stay)
+        return transmat
+
+
+def _pad(sequences: list[np.ndarray]) -> np.ndarray:
+    """`B x T_max x D` array, sequences padded with their last sample."""
+    longest = max(len(sequence) for sequence in sequences)
+    return np.stack([np.concatenate([s, np.repeat(s[-1:], longest - len(s), axis=0)]) for s in sequences])
