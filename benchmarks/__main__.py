@@ -1,10 +1,11 @@
 """`make bench`: run every benchmark and print its table."""
 
-from benchmarks import bench_stl
+from benchmarks import bench_hsmm, bench_stl
 
 
 def main() -> None:
     bench_stl.main()
+    bench_hsmm.main()
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ from typing import Iterator, Optional
 import typer
 
 from stl_lfd import __version__
-from stl_lfd.errors import StlLfdError
+from stl_lfd.errors import ModelError, StlLfdError
 
 app = typer.Typer(
     help="Adapt demonstrated robot skills to Signal Temporal Logic requirements.",
@@ -89,6 +89,78 @@ def robustness(
     else:
         print(f"{result.robustness:.10g}")
         print("satisfied" if result.satisfied else "violated", file=sys.stderr)
+
+
+@app.command()
+def learn(
+    demos_dir: Path = typer.Argument(..., help="Folder of demonstration CSVs (t,x,y,z[,...])."),
+    states: int = typer.Option(6, "-K", "--states", help="Number of HSMM states K."),
+    output: Path = typer.Option(Path("model.npz"), "-o", "--output", help="Model file to write (.npz)."),
+    sample_period: Optional[float] = typer.Option(None, "--sample-period", help="Resample the demos to this period in seconds (default: their median period, at most 50 Hz)."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Also draw demos, states and retrieval into this PNG."),
+) -> None:
+    """Learn a skill model (HSMM) from demonstrations and write the model file.
+
+    Prints one row per state on stdout: mean position, duration mean and standard deviation
+    in seconds, and the most likely successor.
+
+    Example:
+
+        stlopt learn demos/three_regions -K 6 -o three_regions.npz --plot skill.png
+    """
+    from stl_lfd.hsmm import learn_from_folder, retrieve, save_model, summary_rows
+
+    with user_errors():
+        model, sequences = learn_from_folder(demos_dir, states, sample_period)
+        save_model(model, output)
+        if plot is not None:
+            from stl_lfd.report.skill import skill_figure
+
+            trajectory = retrieve(model)
+            figure = skill_figure(sequences, model.means_, model.covars_, trajectory.positions, model.sample_period_, model.signal_names_)
+            figure.savefig(plot, dpi=110)
+    _print_summary(summary_rows(model), model.signal_names_)
+    print(f"wrote {output} ({len(sequences)} demonstrations, K = {states}, {len(model.monitor_.history)} EM iterations)", file=sys.stderr)
+
+
+def _print_summary(rows: list[dict], names: list[str]) -> None:
+    header = ["state"] + [f"{name}" for name in names] + ["duration_s", "duration_std_s", "successor"]
+    print("\t".join(header))
+    for row in rows:
+        values = [str(row["state"])] + [f"{row['mean'][name]:.4f}" for name in names]
+        values += [f"{row['duration_mean']:.3f}", f"{row['duration_std']:.3f}", str(row["successor"] or "-")]
+        print("\t".join(values))
+
+
+@app.command()
+def retrieve(
+    model_file: Path = typer.Argument(..., help="Model file written by 'stlopt learn'."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="CSV to write (default: stdout)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to retrieve (default: the model's expected duration)."),
+    rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second of the output (default: the model's rate)."),
+) -> None:
+    """Write the reference trajectory of a skill model as a signal CSV.
+
+    Columns: t, the model's signals (x, y, z, ...) and `state`, the HSMM state followed (1-based).
+
+    Example:
+
+        stlopt retrieve three_regions.npz --rate 240 -o reference.csv
+    """
+    from stl_lfd.hsmm import load_model
+    from stl_lfd.hsmm import retrieve as retrieve_trajectory
+    from stl_lfd.signals import SignalTable, write_signal_csv
+
+    with user_errors():
+        model = load_model(model_file)
+        if rate is not None and not rate > 0:
+            raise ModelError(f"--rate must be positive (got {rate})")
+        trajectory = retrieve_trajectory(model, duration, rate)
+    columns = {name: trajectory.positions[:, index] for index, name in enumerate(trajectory.signal_names)}
+    columns["state"] = trajectory.states + 1.0
+    write_signal_csv(SignalTable(trajectory.times, columns), output if output is not None else sys.stdout)
+    if output is not None:
+        print(f"wrote {output} ({trajectory.times.size} samples, {trajectory.times[-1]:.2f} s)", file=sys.stderr)
 
 
 if __name__ == "__main__":

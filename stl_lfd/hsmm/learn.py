@@ -10,9 +10,16 @@ from stl_lfd.errors import ModelError
 from stl_lfd.hsmm.demos import load_demos, median_period, resample
 from stl_lfd.hsmm.model import HSMM
 
+# Demonstrations are resampled no finer than this (s): hand-guided motions have no content
+# above a few hertz, and EM, state sequences and tracking all cost time per sample.
+COARSEST_DEFAULT_PERIOD = 0.02
+
 
 def learn_from_folder(folder: str | Path, n_states: int = 6, sample_period: float | None = None) -> tuple[HSMM, list[np.ndarray]]:
-    """Load, resample to one period (default: the demos' median period) and fit.
+    """Load, resample to one period and fit.
+
+    The default period is the demonstrations' median period, but not finer than
+    `COARSEST_DEFAULT_PERIOD` (50 Hz).
 
     Returns:
         the fitted model and the resampled demonstrations (`T_i x D` each).
@@ -20,7 +27,9 @@ def learn_from_folder(folder: str | Path, n_states: int = 6, sample_period: floa
     if n_states < 1:
         raise ModelError(f"K must be at least 1 (got {n_states})")
     demos = load_demos(folder)
-    period = median_period(demos) if sample_period is None else sample_period
+    period = max(median_period(demos), COARSEST_DEFAULT_PERIOD) if sample_period is None else sample_period
+    if not period > 0:
+        raise ModelError(f"the sample period must be positive (got {period})")
     sequences = [resample(demo, period) for demo in demos]
     shortest = min(len(sequence) for sequence in sequences)
     if shortest < 2 * n_states:

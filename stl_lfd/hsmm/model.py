@@ -58,7 +58,7 @@ class HSMM:
         signal_names_: the D signal names.
     """
 
-    def __init__(self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-3, reg_covar: float = 1e-6) -> None:
+    def __init__(self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-2, reg_covar: float = 1e-6) -> None:
         self.n_states = n_states
         self.n_iter = n_iter
         self.tol = tol
@@ -213,13 +213,12 @@ class HSMM:
             )
 
     def _init_kbins(self, sequences: list[np.ndarray]) -> None:
+        """k-bins: cut every demonstration into K equal time bins; state k starts as bin k."""
         K, D = self.n_states, sequences[0].shape[1]
         bins = [np.array_split(sequence, K) for sequence in sequences]
-        self.means_ = np.array([np.concatenate([b[k] for b in bins]).mean(axis=0) for k in range(K)])
-        covars = []
-        for k in range(K):
-            pooled = np.concatenate([b[k] for b in bins])
-            covars.append(np.atleast_2d(np.cov(pooled.T, bias=True)) if len(pooled) > 1 else np.zeros((D, D)))
+        pooled = [np.concatenate([b[k] for b in bins]) for k in range(K)]
+        self.means_ = np.array([samples.mean(axis=0) for samples in pooled])
+        covars = [np.atleast_2d(np.cov(samples.T, bias=True)) if len(samples) > 1 else np.zeros((D, D)) for samples in pooled]
         self.covars_ = np.array(covars) + self.reg_covar * np.eye(D)
         self.startprob_ = np.eye(K)[0]
 
@@ -238,7 +237,8 @@ class HSMM:
             axis=-1,
         ).reshape(padded.shape[0], padded.shape[1], self.n_states)
         log_scale = log_likelihood.max(axis=-1)
-        return np.exp(log_likelihood - log_scale[..., None]), log_scale
+        # Floor: a frame that no reachable state explains must not zero the forward pass.
+        return np.exp(np.maximum(log_likelihood - log_scale[..., None], -300.0)), log_scale
 
     def _m_step(self, padded: np.ndarray, gamma: np.ndarray, xi_sum: np.ndarray, lengths: np.ndarray) -> np.ndarray:
         D = padded.shape[-1]

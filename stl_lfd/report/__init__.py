@@ -1,0 +1,1 @@
+"""Figures. Functions take arrays and return matplotlib Figures; callers save them."""
