@@ -102,7 +102,7 @@ def state_occupancy(startprob: np.ndarray, transmat: np.ndarray, pmf: np.ndarray
     reversed_pmf = pmf[:, ::-1]  # column D-1-k holds p(k+1)
     entries = np.zeros((steps, states))  # S_t: probability of entering i at t+1
     for t in range(steps):
-        # a_t(i, 1) = pi_i p_i(t+1 - 1 + 1)... with 0-based t: pi_i p_i(t + 1) + sum_s S_s p_i(t - s)
+        # 0-based t: a_t(i, 1) = pi_i p_i(t + 1) + sum_{s < t} S_s(i) p_i(t - s)
         first = startprob * pmf[:, t] if t < max_steps else np.zeros(states)
         begin = max(0, t - max_steps)
         if t > 0:
