@@ -8,7 +8,6 @@ the code of its class in `stl_lfd.errors`; usage errors exit 2.
 from __future__ import annotations
 
 import json
-import math
 import sys
 import warnings
 from contextlib import contextmanager

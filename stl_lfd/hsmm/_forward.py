@@ -9,6 +9,7 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.signal import fftconvolve
 from scipy.stats import norm
 
 
@@ -115,8 +116,6 @@ def state_occupancy(startprob: np.ndarray, transmat: np.ndarray, pmf: np.ndarray
 
 def _occupancy_from_entries(startprob: np.ndarray, entries: np.ndarray, survival: np.ndarray, steps: int) -> np.ndarray:
     """h_t(i) = pi_i P_i(>= t + 1) + sum_{s < t} S_s(i) P_i(>= t - s), by FFT convolution."""
-    from scipy.signal import fftconvolve
-
     states, max_steps = survival.shape
     kernel = np.zeros((states, steps))
     width = min(max_steps, steps)

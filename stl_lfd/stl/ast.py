@@ -212,8 +212,6 @@ class Until(Formula):
         return (self.left, self.right)
 
 
-Temporal = Always | Eventually | Until
-
 
 @dataclass(frozen=True)
 class Definition:

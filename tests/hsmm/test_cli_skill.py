@@ -9,7 +9,6 @@ from typer.testing import CliRunner
 
 from stl_lfd.cli import app
 from stl_lfd.hsmm import learn_from_folder, load_model, retrieve
-from stl_lfd.hsmm.demos import load_demos
 from stl_lfd.signals import read_signal_csv
 from stl_lfd.stl import compile_spec, load_spec, parse
 from tests.conftest import ROOT
