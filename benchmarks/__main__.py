@@ -1,11 +1,12 @@
 """`make bench`: run every benchmark and print its table."""
 
-from benchmarks import bench_hsmm, bench_stl
+from benchmarks import bench_hsmm, bench_sim, bench_stl
 
 
 def main() -> None:
     bench_stl.main()
     bench_hsmm.main()
+    bench_sim.main()
 
 
 if __name__ == "__main__":

@@ -18,7 +18,7 @@ from typing import Iterator, Optional
 import typer
 
 from stl_lfd import __version__
-from stl_lfd.errors import ModelError, StlLfdError
+from stl_lfd.errors import ExecutionError, ModelError, StlLfdError
 
 app = typer.Typer(
     help="Adapt demonstrated robot skills to Signal Temporal Logic requirements.",
@@ -32,6 +32,11 @@ app = typer.Typer(
 class SemanticsOption(str, Enum):
     classic = "classic"
     new = "new"
+
+
+class BackendOption(str, Enum):
+    pybullet = "pybullet"
+    kinematic = "kinematic"
 
 
 def _print_warning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -160,6 +165,104 @@ def retrieve(
     write_signal_csv(SignalTable(trajectory.times, columns), output if output is not None else sys.stdout)
     if output is not None:
         print(f"wrote {output} ({trajectory.times.size} samples, {trajectory.times[-1]:.2f} s)", file=sys.stderr)
+
+
+@app.command()
+def rollout(
+    model_file: Path = typer.Argument(..., help="Model file written by 'stlopt learn'."),
+    scene: str = typer.Option("free_space", help="Built-in scene name or a scene .yaml file."),
+    backend: BackendOption = typer.Option(BackendOption.pybullet, help="pybullet simulates a Panda; kinematic records the reference itself."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="Signal CSV to write (default: stdout)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to execute (default: the model's expected duration)."),
+    rate: float = typer.Option(100.0, "--rate", help="Recording rate in samples per second."),
+) -> None:
+    """Execute a skill model once and write the recorded signals (t,x,y,z,gripper,force).
+
+    Example:
+
+        stlopt rollout three_regions.npz | stlopt robustness specs/phi1.stl -
+    """
+    import time
+
+    from stl_lfd.execution import rollout_model
+    from stl_lfd.hsmm import load_model
+    from stl_lfd.signals import write_signal_csv
+    from stl_lfd.sim import load_scene
+
+    with user_errors():
+        _check_duration_and_rate(duration, rate)
+        model = load_model(model_file)
+        world = load_scene(scene)
+        start = time.perf_counter()
+        result = rollout_model(model, world, backend.value, duration, rate)
+        elapsed = time.perf_counter() - start
+    write_signal_csv(result.signals, output if output is not None else sys.stdout)
+    simulated = result.signals.duration
+    print(
+        f"{backend.value} rollout in {world.name}: {simulated:.2f} s simulated in {elapsed:.2f} s "
+        f"({simulated / max(elapsed, 1e-9):.0f}x real time); tracking error RMS {1000 * result.tracking_rms:.2f} mm, "
+        f"worst {1000 * result.tracking_max:.2f} mm" + (f"; wrote {output}" if output is not None else ""),
+        file=sys.stderr,
+    )
+
+
+def _check_duration_and_rate(duration: Optional[float], rate: float) -> None:
+    if duration is not None and not duration > 0:
+        raise ModelError(f"--duration must be positive (got {duration})")
+    if not rate > 0:
+        raise ModelError(f"--rate must be positive (got {rate})")
+
+
+@app.command()
+def replay(
+    source: Path = typer.Argument(..., help="A model file, or a run directory written by 'stlopt optimize'."),
+    trial: str = typer.Option("best", "--trial", help="For a run directory: 'best' or a trial number."),
+    gui: bool = typer.Option(False, "--gui", help="Show the PyBullet GUI in real time (needs a display)."),
+    video: Optional[Path] = typer.Option(None, "--video", help="Record a video (.mp4 or .gif) headless."),
+    spec: Optional[Path] = typer.Option(None, "--spec", help="STL spec to evaluate and whose regions to draw (a run directory knows its own)."),
+    scene: Optional[str] = typer.Option(None, help="Scene (default: the run's, or free_space)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to execute (default: the run's, or the model's expected duration)."),
+    semantics: Optional[SemanticsOption] = typer.Option(None, help="Semantics of the printed robustness (default: the run's, or new)."),
+) -> None:
+    """Execute a skill again in PyBullet and show it (GUI) or film it (video).
+
+    Without --gui or --video, the GUI opens when a display exists; otherwise a video is
+    written (replay.mp4, or replay-trial-N.mp4 inside a run directory). When a spec is known,
+    the robustness of the replayed execution is printed on stdout.
+
+    Examples:
+
+        stlopt replay runs/phi1 --trial best --video best.mp4
+
+        stlopt replay three_regions.npz --spec specs/phi1.stl --gui
+    """
+    import os
+
+    from stl_lfd.replay import ReplayRequest, replay_skill
+
+    use_gui = gui or (video is None and bool(os.environ.get("DISPLAY")))
+    request = ReplayRequest(source, trial, spec, scene, duration, semantics.value if semantics else None)
+    with user_errors():
+        if gui and not os.environ.get("DISPLAY"):
+            raise ExecutionError("--gui needs a display and DISPLAY is not set; record a video with --video FILE.mp4 instead")
+        outcome = replay_skill(request, gui=use_gui, video=video, progress=_progress_bar)
+    if outcome.video is not None:
+        print(f"wrote {outcome.video} ({outcome.frames} frames)", file=sys.stderr)
+    if outcome.robustness is not None:
+        print(f"{outcome.robustness:.10g}")
+        print(f"{'satisfied' if outcome.robustness > 0 else 'violated'} ({outcome.semantics} robustness of {outcome.spec})", file=sys.stderr)
+
+
+@contextmanager
+def _progress_bar(description: str, total: int) -> Iterator:
+    """A rich progress bar on stderr; yields a function taking the number of steps done."""
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=Console(stderr=True), transient=True) as progress:
+        task = progress.add_task(description, total=total)
+        yield lambda done: progress.update(task, completed=done)
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from stl_lfd.errors import SpecError
-from stl_lfd.signals import read_signal_csv
+from stl_lfd.signals import SignalTable, read_signal_csv
 from stl_lfd.stl import compile_spec, load_spec
 
 
@@ -48,9 +48,14 @@ class Evaluation:
 
 def evaluate_file(spec_path: str | Path, signal_path: str | Path, semantics: str = "classic", nu: float = 1.0) -> Evaluation:
     """Load, compile and evaluate; raises `StlLfdError` subclasses on bad input."""
+    load_spec(spec_path)  # a bad spec is reported before a bad signal file
+    return evaluate_table(spec_path, read_signal_csv(signal_path), semantics, nu)
+
+
+def evaluate_table(spec_path: str | Path, table: SignalTable, semantics: str = "classic", nu: float = 1.0) -> Evaluation:
+    """Robustness of an in-memory signal table against a specification file."""
     spec = load_spec(spec_path)
     function = compile_spec(spec, semantics, nu, source=str(spec_path))
-    table = read_signal_csv(signal_path)
     try:
         value = function(table.columns, table.times)
     except SpecError as error:

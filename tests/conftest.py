@@ -1,5 +1,6 @@
 from pathlib import Path
 
+import pytest
 from hypothesis import settings
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -7,3 +8,20 @@ ROOT = Path(__file__).resolve().parent.parent
 # Deterministic property tests: the same examples on every run and machine.
 settings.register_profile("default", derandomize=True, deadline=None, max_examples=150)
 settings.load_profile("default")
+
+
+@pytest.fixture(scope="session")
+def learned_model():
+    """The skill learned from the bundled three-region demonstrations (about 1 s to fit)."""
+    from stl_lfd.hsmm import learn_from_folder
+
+    return learn_from_folder(ROOT / "demos" / "three_regions", 6)[0]
+
+
+@pytest.fixture(scope="session")
+def learned_model_file(learned_model, tmp_path_factory):
+    from stl_lfd.hsmm import save_model
+
+    path = tmp_path_factory.mktemp("model") / "three_regions.npz"
+    save_model(learned_model, path)
+    return path

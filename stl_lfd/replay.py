@@ -1,0 +1,127 @@
+"""`stlopt replay`: execute a skill again in PyBullet, in the GUI or into a video.
+
+The skill comes from a model file, or from a trial of a run directory (which also names the
+spec, scene, duration and semantics of the run).
+"""
+
+from __future__ import annotations
+
+import os
+from contextlib import AbstractContextManager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from stl_lfd.errors import ConfigError, ExecutionError
+from stl_lfd.evaluate import evaluate_table
+from stl_lfd.execution import reference_of, scene_with_spec_regions
+from stl_lfd.hsmm import HSMM, load_model
+from stl_lfd.sim import DEFAULT_RATE, execute
+
+ProgressFactory = Callable[[str, int], AbstractContextManager[Callable[[int], None]]]
+
+
+@dataclass(frozen=True)
+class ReplayRequest:
+    """What to replay; None fields take the run's settings or the defaults."""
+
+    source: Path
+    trial: str = "best"
+    spec: Path | None = None
+    scene: str | None = None
+    duration: float | None = None
+    semantics: str | None = None
+
+
+@dataclass(frozen=True)
+class Skill:
+    """A model to execute with the settings it is judged under."""
+
+    model: HSMM
+    spec: Path | None
+    scene: str
+    duration: float | None
+    semantics: str
+    nu: float
+    default_video: Path
+
+
+@dataclass(frozen=True)
+class ReplayOutcome:
+    robustness: float | None
+    semantics: str
+    spec: Path | None
+    video: Path | None
+    frames: int
+
+
+def replay_skill(request: ReplayRequest, gui: bool, video: Path | None, progress: ProgressFactory) -> ReplayOutcome:
+    """Execute the requested skill in the GUI (real time) or headless into a video."""
+    skill = resolve_skill(request)
+    scene = scene_with_spec_regions(skill.scene, skill.spec)
+    reference = reference_of(skill.model, skill.duration)
+    if gui:
+        from stl_lfd.sim.panda import PyBulletBackend, pace_real_time
+
+        backend = PyBulletBackend(gui=True)
+        try:
+            rollout = execute(reference, scene, backend, DEFAULT_RATE, pace_real_time())
+        finally:
+            backend.close()
+        written, frames = None, 0
+    else:
+        written = Path(video) if video is not None else skill.default_video
+        rollout, frames = _film(reference, scene, written, progress)
+    robustness = None
+    if skill.spec is not None:
+        robustness = evaluate_table(skill.spec, rollout.signals, skill.semantics, skill.nu).robustness
+    return ReplayOutcome(robustness, skill.semantics, skill.spec, written, frames)
+
+
+def _film(reference, scene, path: Path, progress: ProgressFactory):
+    """Execute while filming into `path`; the file appears only once it is complete."""
+    from stl_lfd.sim.video import VideoRecorder, frame_count
+
+    partial = path.with_name(f".{path.stem}.partial{path.suffix}")
+    with progress(f"filming {path.name}", frame_count(reference.duration, scene.camera.fps)) as advance:
+        recorder = VideoRecorder(partial, scene.camera, advance)
+        try:
+            rollout = execute(reference, scene, "pybullet", DEFAULT_RATE, recorder)
+        except BaseException:
+            recorder.close()
+            partial.unlink(missing_ok=True)
+            raise
+        recorder.close()
+    os.replace(partial, path)
+    return rollout, recorder.frames
+
+
+def resolve_skill(request: ReplayRequest) -> Skill:
+    """The model and settings named by a replay request."""
+    source = request.source
+    if source.is_dir():
+        from stl_lfd.optim.rundir import trial_skill
+
+        run = trial_skill(source, request.trial)
+        return Skill(
+            model=run.model,
+            spec=request.spec or run.spec,
+            scene=request.scene or run.scene,
+            duration=request.duration or run.duration,
+            semantics=request.semantics or run.semantics,
+            nu=run.nu,
+            default_video=source / f"replay-trial-{run.trial}.mp4",
+        )
+    if not source.exists():
+        raise ConfigError(f"{source}: no such model file or run directory")
+    if request.trial != "best":
+        raise ExecutionError("--trial applies to run directories, not to a model file")
+    return Skill(
+        model=load_model(source),
+        spec=request.spec,
+        scene=request.scene or "free_space",
+        duration=request.duration,
+        semantics=request.semantics or "new",
+        nu=1.0,
+        default_video=Path("replay.mp4"),
+    )

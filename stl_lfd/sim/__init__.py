@@ -1,0 +1,86 @@
+"""Execution of reference trajectories: backends, scenes and signal recording.
+
+One interface, `execute(reference, scene, backend)`, returns the recorded signals of the
+execution as a `Rollout`. Backends:
+
+- `kinematic`: the reference itself is the signal (instant, for tests and quick studies);
+- `pybullet`: a simulated Franka Panda tracking the reference (see `stl_lfd.sim.panda`).
+
+This package reads no STL and no skill model: callers turn a model into a `Reference` and
+pass the regions to draw through `Scene.with_regions`.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Protocol
+
+from stl_lfd.errors import ExecutionError
+from stl_lfd.sim.kinematic import KinematicBackend
+from stl_lfd.sim.reference import Reference, Rollout, TrackingWarning, warn_if_untracked
+from stl_lfd.sim.scene import Scene, builtin_scenes, load_scene
+
+BACKENDS = ("pybullet", "kinematic")
+
+
+class Backend(Protocol):
+    """What every backend offers."""
+
+    name: str
+
+    def run(self, reference: Reference, scene: Scene, rate: float, observer: Callable | None = None) -> Rollout: ...
+
+    def close(self) -> None: ...
+
+
+DEFAULT_RATE = 100.0
+
+_backends: dict[str, Backend] = {}
+
+
+def get_backend(name: str) -> Backend:
+    """The process-wide backend called `name` (worlds are built once and reused)."""
+    if name not in BACKENDS:
+        raise ExecutionError(f"unknown backend '{name}' (choose from {', '.join(BACKENDS)})")
+    if name not in _backends:
+        if name == "kinematic":
+            _backends[name] = KinematicBackend()
+        else:
+            from stl_lfd.sim.panda import PyBulletBackend
+
+            _backends[name] = PyBulletBackend()
+    return _backends[name]
+
+
+def execute(
+    reference: Reference,
+    scene: Scene,
+    backend: str | Backend = "pybullet",
+    rate: float = DEFAULT_RATE,
+    observer: Callable | None = None,
+) -> Rollout:
+    """Execute `reference` in `scene` and return the signals recorded at `rate` samples/s.
+
+    `backend` is a name of `BACKENDS` or a backend object (such as a GUI `PyBulletBackend`).
+
+    Warns (`TrackingWarning`) with the worst error when the robot could not follow the
+    reference by more than the scene's tracking tolerance.
+    """
+    runner = get_backend(backend) if isinstance(backend, str) else backend
+    rollout = runner.run(reference, scene, rate, observer)
+    warn_if_untracked(rollout, reference, scene.tracking_tolerance)
+    return rollout
+
+
+__all__ = [
+    "BACKENDS",
+    "Backend",
+    "DEFAULT_RATE",
+    "Reference",
+    "Rollout",
+    "Scene",
+    "TrackingWarning",
+    "builtin_scenes",
+    "execute",
+    "get_backend",
+    "load_scene",
+]

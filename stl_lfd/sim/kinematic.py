@@ -1,0 +1,34 @@
+"""The kinematic backend: the reference itself is the recorded signal.
+
+Instant and exact, for tests and quick studies. Nothing can be touched, so `force` is 0.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from stl_lfd.signals import SignalTable
+from stl_lfd.sim.reference import Reference, Rollout, recording_times
+from stl_lfd.sim.scene import Scene
+
+
+class KinematicBackend:
+    name = "kinematic"
+
+    def run(self, reference: Reference, scene: Scene, rate: float, observer: Callable | None = None) -> Rollout:
+        """Sample `reference` at `rate`; `observer` is not called (there is no world to film)."""
+        times = recording_times(reference.duration, rate)
+        positions = reference.positions_at(times)
+        columns = {
+            "x": positions[:, 0],
+            "y": positions[:, 1],
+            "z": positions[:, 2],
+            "gripper": reference.gripper_at(times, scene.gripper_opening),
+            "force": np.zeros(times.size),
+        }
+        return Rollout(SignalTable(times, columns, source="kinematic rollout"), np.zeros(times.size))
+
+    def close(self) -> None:
+        pass

@@ -1,0 +1,277 @@
+"""The PyBullet backend: a Franka Panda tracking the reference with inverse kinematics.
+
+Every simulation step (240 Hz) computes the inverse kinematics of the grasp-target link (link
+11 of `franka_panda/panda.urdf`) for the next reference position with the gripper pointing
+down, and sends the joint targets to the arm's position controllers. The recording is taken at
+every step and resampled to the requested rate at the end.
+
+A world is built once per scene and process (about 0.2 s) and restored to its saved initial
+state before each rollout, so the same reference always gives bit-identical signals.
+"""
+
+from __future__ import annotations
+
+import atexit
+import math
+import os
+import sys
+import time as clock
+import weakref
+from contextlib import contextmanager
+from typing import Callable, Iterator
+
+import numpy as np
+
+from stl_lfd.errors import ExecutionError
+from stl_lfd.signals import SignalTable
+from stl_lfd.sim.reference import Reference, Rollout, recording_times
+from stl_lfd.sim.scene import Camera, Region, Scene, SceneObject
+
+TIME_STEP = 1.0 / 240.0
+END_EFFECTOR_LINK = 11
+ARM_JOINTS = list(range(7))
+FINGER_JOINTS = [9, 10]
+# Elbow up, hand above the table: the posture the inverse kinematics starts from.
+REST_POSE = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785, 0.04, 0.04]
+GRIPPER_DOWN = (1.0, 0.0, 0.0, 0.0)  # quaternion (x, y, z, w): rotation by pi about x
+
+Observer = Callable[[float, "PandaWorld"], None]
+
+# Worlds still connected at exit are disconnected while pybullet is intact; left to the
+# garbage collector, their clients would fail noisily during interpreter shutdown.
+_open_worlds: "weakref.WeakSet[PandaWorld]" = weakref.WeakSet()
+atexit.register(lambda: [world.close() for world in list(_open_worlds)])
+
+
+@contextmanager
+def _silenced() -> Iterator[None]:
+    """Drop what the pybullet C library prints when it loads and connects (build time,
+    argv[0]): stdout carries data such as the signal CSV, stderr is for our messages."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        yield
+    finally:
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for descriptor in (*saved, null):
+            os.close(descriptor)
+
+
+class PandaWorld:
+    """One pybullet client holding the floor, the Panda and the scene's objects and regions."""
+
+    def __init__(self, scene: Scene, gui: bool = False) -> None:
+        with _silenced():
+            import pybullet
+            import pybullet_data
+            from pybullet_utils import bullet_client
+
+            if gui and not os.environ.get("DISPLAY"):
+                raise ExecutionError("the PyBullet GUI needs a display and DISPLAY is not set (record a video instead)")
+            mode = pybullet.GUI if gui else pybullet.DIRECT
+            self.client = bullet_client.BulletClient(connection_mode=mode)
+        self.pb = pybullet
+        self.scene = scene
+        client = self.client
+        client.setAdditionalSearchPath(pybullet_data.getDataPath())
+        client.setGravity(0, 0, -9.81)
+        client.setTimeStep(TIME_STEP)
+        if gui:
+            client.configureDebugVisualizer(pybullet.COV_ENABLE_GUI, 0)
+            camera = scene.camera
+            client.resetDebugVisualizerCamera(camera.distance, camera.yaw, camera.pitch, camera.target)
+        self.floor = client.loadURDF("plane.urdf")
+        self.robot = client.loadURDF("franka_panda/panda.urdf", useFixedBase=True)
+        self.objects = {item.name: self._add_object(item) for item in scene.objects}
+        for region in scene.regions:
+            self._add_region(region)
+        for joint, angle in zip(ARM_JOINTS + FINGER_JOINTS, REST_POSE):
+            client.resetJointState(self.robot, joint, angle)
+        self.initial_state = client.saveState()
+        _open_worlds.add(self)
+
+    def _add_object(self, item: SceneObject) -> int:
+        pb, client = self.pb, self.client
+        if item.shape == "box":
+            shape = dict(shapeType=pb.GEOM_BOX, halfExtents=item.size)
+            visual = dict(shapeType=pb.GEOM_BOX, halfExtents=item.size)
+        elif item.shape == "cylinder":
+            shape = dict(shapeType=pb.GEOM_CYLINDER, radius=item.size[0], height=item.size[1])
+            visual = dict(shapeType=pb.GEOM_CYLINDER, radius=item.size[0], length=item.size[1])
+        else:
+            shape = dict(shapeType=pb.GEOM_SPHERE, radius=item.size[0])
+            visual = dict(shapeType=pb.GEOM_SPHERE, radius=item.size[0])
+        body = client.createMultiBody(
+            baseMass=item.mass,
+            baseCollisionShapeIndex=client.createCollisionShape(**shape),
+            baseVisualShapeIndex=client.createVisualShape(rgbaColor=item.color, **visual),
+            basePosition=item.position,
+            baseOrientation=client.getQuaternionFromEuler(item.orientation),
+        )
+        client.changeDynamics(body, -1, lateralFriction=item.friction)
+        return body
+
+    def _add_region(self, region: Region) -> int:
+        lower, upper = np.array(region.lower), np.array(region.upper)
+        visual = self.client.createVisualShape(self.pb.GEOM_BOX, halfExtents=list((upper - lower) / 2), rgbaColor=region.color)
+        return self.client.createMultiBody(baseMass=0, baseCollisionShapeIndex=-1, baseVisualShapeIndex=visual, basePosition=list((upper + lower) / 2))
+
+    def reset(self, position: np.ndarray, opening: float) -> None:
+        """Restore the initial state, then place the hand at `position` at rest."""
+        client = self.client
+        client.restoreState(self.initial_state)
+        for _ in range(20):
+            angles = self._inverse_kinematics(position, iterations=100)
+            for joint, angle in zip(ARM_JOINTS, angles):
+                client.resetJointState(self.robot, joint, angle)
+            if np.linalg.norm(self.end_effector() - position) < 1e-6:
+                break
+        for joint in FINGER_JOINTS:
+            client.resetJointState(self.robot, joint, opening / 2)
+
+    def command(self, position: np.ndarray, opening: float) -> None:
+        """Send joint targets that bring the hand to `position` and the fingers to `opening`."""
+        control = self.scene.control
+        self.client.setJointMotorControlArray(
+            self.robot,
+            ARM_JOINTS,
+            self.pb.POSITION_CONTROL,
+            targetPositions=self._inverse_kinematics(position),
+            forces=control.arm_forces,
+            positionGains=[control.position_gain] * len(ARM_JOINTS),
+        )
+        self.client.setJointMotorControlArray(
+            self.robot, FINGER_JOINTS, self.pb.POSITION_CONTROL, targetPositions=[opening / 2] * 2, forces=[control.finger_force] * 2
+        )
+
+    def step(self) -> None:
+        self.client.stepSimulation()
+
+    def _inverse_kinematics(self, position: np.ndarray, iterations: int = 20) -> list[float]:
+        angles = self.client.calculateInverseKinematics(
+            self.robot, END_EFFECTOR_LINK, list(position), GRIPPER_DOWN, maxNumIterations=iterations, residualThreshold=1e-5
+        )
+        return list(angles[: len(ARM_JOINTS)])
+
+    def end_effector(self) -> np.ndarray:
+        """Position (m) of the grasp-target link frame."""
+        return np.array(self.client.getLinkState(self.robot, END_EFFECTOR_LINK, computeForwardKinematics=1)[4])
+
+    def gripper_opening(self) -> float:
+        return sum(self.client.getJointState(self.robot, joint)[0] for joint in FINGER_JOINTS)
+
+    def contact_force(self) -> float:
+        """Norm of the summed contact normal forces between the robot and the rest of the world."""
+        total = np.zeros(3)
+        for contact in self.client.getContactPoints(bodyA=self.robot):
+            if contact[2] != self.robot:
+                total += contact[9] * np.asarray(contact[7])
+        return float(np.linalg.norm(total))
+
+    def render(self, camera: Camera) -> np.ndarray:
+        """`height x width x 3` uint8 image from the scene camera (TinyRenderer, no display)."""
+        client, pb = self.client, self.pb
+        view = client.computeViewMatrixFromYawPitchRoll(camera.target, camera.distance, camera.yaw, camera.pitch, 0.0, 2)
+        projection = client.computeProjectionMatrixFOV(55.0, camera.width / camera.height, 0.05, 5.0)
+        _, _, pixels, _, _ = client.getCameraImage(camera.width, camera.height, view, projection, renderer=pb.ER_TINY_RENDERER)
+        return np.asarray(pixels, dtype=np.uint8).reshape(camera.height, camera.width, 4)[:, :, :3]
+
+    def close(self) -> None:
+        _open_worlds.discard(self)
+        try:
+            self.client.disconnect()
+        except Exception:  # already gone (the GUI window was closed)
+            pass
+
+
+class PyBulletBackend:
+    """Runs references on a simulated Panda; keeps one world per scene for the process."""
+
+    name = "pybullet"
+
+    def __init__(self, gui: bool = False) -> None:
+        self.gui = gui
+        self._worlds: dict[Scene, PandaWorld] = {}
+
+    def world(self, scene: Scene) -> PandaWorld:
+        if scene not in self._worlds:
+            self._worlds[scene] = PandaWorld(scene, self.gui)
+        return self._worlds[scene]
+
+    def run(self, reference: Reference, scene: Scene, rate: float, observer: Observer | None = None) -> Rollout:
+        """Execute `reference` and record `t, x, y, z, gripper, force` at `rate` samples/s.
+
+        `observer(time, world)` is called after the reset and after every simulation step
+        (for videos and for pacing the GUI).
+        """
+        world = self.world(scene)
+        steps = int(round(reference.duration / TIME_STEP))
+        step_times = np.arange(steps + 1) * TIME_STEP
+        targets = reference.positions_at(step_times)
+        openings = reference.gripper_at(step_times, scene.gripper_opening)
+        positions = np.empty((steps + 1, 3))
+        fingers = np.empty(steps + 1)
+        forces = np.empty(steps + 1)
+        world.reset(targets[0], openings[0])
+        positions[0], fingers[0], forces[0] = world.end_effector(), world.gripper_opening(), world.contact_force()
+        if observer is not None:
+            observer(0.0, world)
+        for step in range(1, steps + 1):
+            world.command(targets[step], openings[step])
+            world.step()
+            positions[step], fingers[step], forces[step] = world.end_effector(), world.gripper_opening(), world.contact_force()
+            if observer is not None:
+                observer(step_times[step], world)
+        if not np.isfinite(positions).all():
+            raise ExecutionError("rollout: the simulation diverged (non-finite end-effector positions)")
+        return _record(step_times, positions, fingers, low_pass(forces, scene.force_filter_hz, TIME_STEP), reference, rate)
+
+    def close(self) -> None:
+        for world in self._worlds.values():
+            world.close()
+        self._worlds.clear()
+
+
+def low_pass(values: np.ndarray, cutoff_hz: float, period: float) -> np.ndarray:
+    """First-order low-pass filter, as a force sensor's electronics would apply (starts at 0)."""
+    gain = 1.0 - math.exp(-2.0 * math.pi * cutoff_hz * period)
+    filtered = np.empty_like(values)
+    state = 0.0
+    for index, value in enumerate(values):
+        state += gain * (value - state)
+        filtered[index] = state
+    return filtered
+
+
+def _record(step_times, positions, fingers, forces, reference: Reference, rate: float) -> Rollout:
+    times = recording_times(reference.duration, rate)
+    times = times[times <= step_times[-1] + 1e-9]
+    recorded = np.column_stack([np.interp(times, step_times, positions[:, axis]) for axis in range(3)])
+    columns = {
+        "x": recorded[:, 0],
+        "y": recorded[:, 1],
+        "z": recorded[:, 2],
+        "gripper": np.interp(times, step_times, fingers),
+        "force": np.interp(times, step_times, forces),
+    }
+    error = np.linalg.norm(recorded - reference.positions_at(times), axis=1)
+    return Rollout(SignalTable(times, columns, source="pybullet rollout"), error)
+
+
+def pace_real_time() -> Observer:
+    """An observer that slows the simulation down to wall-clock time (for the GUI)."""
+    start: list[float] = []
+
+    def observe(time: float, world: PandaWorld) -> None:
+        if not start:
+            start.append(clock.perf_counter() - time)
+        delay = start[0] + time - clock.perf_counter()
+        if delay > 0:
+            clock.sleep(delay)
+
+    return observe

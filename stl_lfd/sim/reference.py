@@ -1,0 +1,113 @@
+"""What a backend executes (`Reference`) and what it returns (`Rollout`)."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from stl_lfd.errors import ExecutionError
+from stl_lfd.signals import SignalTable
+
+
+class TrackingWarning(UserWarning):
+    """The robot did not follow the reference (typically: a target outside the workspace)."""
+
+
+@dataclass
+class Reference:
+    """A reference end-effector trajectory, and optionally gripper commands.
+
+    Attributes:
+        times: `T` strictly increasing seconds, starting at 0.
+        positions: `T x 3` grasp-target positions (m) in the robot base frame.
+        gripper: `T` finger openings (m), or None to keep the scene's opening.
+    """
+
+    times: np.ndarray
+    positions: np.ndarray
+    gripper: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        self.times = np.asarray(self.times, dtype=float)
+        self.positions = np.asarray(self.positions, dtype=float)
+        if self.times.ndim != 1 or self.times.size < 2:
+            raise ExecutionError("reference: needs at least two samples")
+        if self.positions.shape != (self.times.size, 3):
+            raise ExecutionError(f"reference: positions must be {self.times.size} x 3 (got {' x '.join(map(str, self.positions.shape))})")
+        if self.gripper is not None:
+            self.gripper = np.asarray(self.gripper, dtype=float)
+            if self.gripper.shape != self.times.shape:
+                raise ExecutionError("reference: gripper commands must have one value per sample")
+        _require_finite("t", self.times[:, None], self.times)
+        _require_finite("x, y, z", self.positions, self.times)
+        if self.gripper is not None:
+            _require_finite("gripper", self.gripper[:, None], self.times)
+        if np.any(np.diff(self.times) <= 0):
+            raise ExecutionError("reference: times must be strictly increasing")
+
+    @property
+    def duration(self) -> float:
+        return float(self.times[-1] - self.times[0])
+
+    def positions_at(self, times: np.ndarray) -> np.ndarray:
+        """`len(times) x 3` positions by linear interpolation (held at the ends)."""
+        return np.column_stack([np.interp(times, self.times, self.positions[:, axis]) for axis in range(3)])
+
+    def gripper_at(self, times: np.ndarray, default: float) -> np.ndarray:
+        """Commanded openings at `times`, or `default` everywhere without gripper commands."""
+        if self.gripper is None:
+            return np.full(np.shape(times), default)
+        return np.interp(times, self.times, self.gripper)
+
+
+def _require_finite(what: str, values: np.ndarray, times: np.ndarray) -> None:
+    bad = ~np.isfinite(values).all(axis=1)
+    if bad.any():
+        index = int(np.argmax(bad))
+        raise ExecutionError(f"reference: {what} not finite at sample {index + 1} (t = {times[index]:.4g} s)")
+
+
+@dataclass
+class Rollout:
+    """A recorded execution.
+
+    Attributes:
+        signals: the signal table (`t, x, y, z, gripper, force`) at the recording rate.
+        tracking_error: `T` distance (m) between recorded and reference position.
+    """
+
+    signals: SignalTable
+    tracking_error: np.ndarray
+
+    @property
+    def tracking_rms(self) -> float:
+        return float(np.sqrt(np.mean(self.tracking_error**2)))
+
+    @property
+    def tracking_max(self) -> float:
+        return float(self.tracking_error.max())
+
+
+def recording_times(duration: float, rate: float) -> np.ndarray:
+    """Sample times 0, 1/rate, ... up to `duration` (inclusive within rounding)."""
+    if not rate > 0:
+        raise ExecutionError(f"recording rate must be positive (got {rate})")
+    count = int(np.floor(duration * rate + 1e-9)) + 1
+    return np.arange(count) / rate
+
+
+def warn_if_untracked(rollout: Rollout, reference: Reference, tolerance: float) -> None:
+    """Warn with the worst error, its time and its target when tracking exceeded `tolerance`."""
+    if rollout.tracking_max <= tolerance:
+        return
+    index = int(np.argmax(rollout.tracking_error))
+    time = rollout.signals.times[index]
+    target = reference.positions_at(np.array([time]))[0]
+    warnings.warn(
+        f"the robot did not follow the reference: worst tracking error {1000 * rollout.tracking_max:.1f} mm "
+        f"at t = {time:.2f} s (target x={target[0]:.3f} y={target[1]:.3f} z={target[2]:.3f}; outside the workspace?)",
+        TrackingWarning,
+        stacklevel=3,
+    )

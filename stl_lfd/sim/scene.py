@@ -1,0 +1,209 @@
+"""Scenes as data: what is in the world, how the robot is controlled, how it is filmed.
+
+Built-in scenes are YAML files in `stl_lfd/sim/scenes/`; `load_scene` takes such a name or the
+path of a user's YAML file. A scene file has the keys of `Scene` below (all optional except
+`description`); unknown keys are errors. Regions of a specification are added at run time with
+`Scene.with_regions`, so that this package never needs to read STL.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from importlib import resources
+from pathlib import Path
+from typing import Any, Mapping
+
+from stl_lfd.errors import ConfigError
+from stl_lfd.yamlfile import check_keys, number, read_yaml, vector
+
+SHAPES = ("box", "cylinder", "sphere")
+REGION_COLORS = ((0.2, 0.5, 0.9, 0.3), (0.9, 0.5, 0.2, 0.3), (0.3, 0.8, 0.3, 0.3), (0.8, 0.3, 0.7, 0.3))
+
+
+@dataclass(frozen=True)
+class Control:
+    """Joint position control of the arm: PD gain (0-1, pybullet's units) and force limits (N m)."""
+
+    position_gain: float = 1.0
+    arm_forces: tuple[float, ...] = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
+    finger_force: float = 20.0
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A fixed camera looking at `target` (metres) from `distance`, `yaw` and `pitch` (degrees)."""
+
+    target: tuple[float, float, float] = (0.5, 0.0, 0.3)
+    distance: float = 1.2
+    yaw: float = 50.0
+    pitch: float = -30.0
+    width: int = 480
+    height: int = 360
+    fps: float = 24.0
+
+
+@dataclass(frozen=True)
+class SceneObject:
+    """A rigid body of the scene.
+
+    `size` holds half extents (x, y, z) for a box, (radius, height) for a cylinder and (radius,)
+    for a sphere. A mass of 0 makes the object fixed to the world.
+    """
+
+    name: str
+    shape: str
+    size: tuple[float, ...]
+    position: tuple[float, float, float]
+    orientation: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    mass: float = 0.0
+    color: tuple[float, float, float, float] = (0.6, 0.6, 0.6, 1.0)
+    friction: float = 1.0
+
+
+@dataclass(frozen=True)
+class Region:
+    """An axis-aligned box drawn for viewing only (no collision): `lower` and `upper` corners."""
+
+    name: str
+    lower: tuple[float, float, float]
+    upper: tuple[float, float, float]
+    color: tuple[float, float, float, float] = REGION_COLORS[0]
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Everything a backend needs to set up and run the world.
+
+    Attributes:
+        name: the scene's name (its file stem).
+        description: one line for humans.
+        gripper_opening: finger opening (m) when the reference does not command the gripper.
+        control: arm and finger control settings.
+        force_filter_hz: cut-off of the first-order low-pass that models the force sensor.
+        tracking_tolerance: worst end-effector error (m) beyond which a rollout warns that the
+            reference was not followed (typically a target outside the workspace).
+        camera: the viewpoint of videos and of the GUI.
+        objects: rigid bodies besides the robot and the floor.
+        regions: boxes drawn for viewing.
+    """
+
+    name: str
+    description: str
+    gripper_opening: float = 0.08
+    control: Control = field(default_factory=Control)
+    force_filter_hz: float = 10.0
+    tracking_tolerance: float = 0.01
+    camera: Camera = field(default_factory=Camera)
+    objects: tuple[SceneObject, ...] = ()
+    regions: tuple[Region, ...] = ()
+
+    def with_regions(self, boxes: Mapping[str, Mapping[str, tuple[float, float]]]) -> "Scene":
+        """A copy that also draws `boxes` (name -> {signal: (lo, hi)}); boxes need x, y and z."""
+        regions = []
+        for index, (name, box) in enumerate(boxes.items()):
+            if not all(axis in box for axis in "xyz"):
+                continue
+            lower = tuple(float(box[axis][0]) for axis in "xyz")
+            upper = tuple(float(box[axis][1]) for axis in "xyz")
+            regions.append(Region(name, lower, upper, REGION_COLORS[index % len(REGION_COLORS)]))
+        return replace(self, regions=tuple(regions))
+
+
+def builtin_scenes() -> list[str]:
+    """Names of the scenes that ship with the package."""
+    folder = resources.files("stl_lfd.sim") / "scenes"
+    return sorted(entry.name[: -len(".yaml")] for entry in folder.iterdir() if entry.name.endswith(".yaml"))
+
+
+def load_scene(name_or_path: str | Path) -> Scene:
+    """A built-in scene by name (`free_space`, ...) or a scene YAML file by path."""
+    text = str(name_or_path)
+    if text in builtin_scenes():
+        path = Path(str(resources.files("stl_lfd.sim") / "scenes" / f"{text}.yaml"))
+    elif text.endswith((".yaml", ".yml")) or Path(text).is_file():
+        path = Path(text)
+        if not path.is_file():
+            raise ConfigError(f"{path}: scene file not found")
+    else:
+        raise ConfigError(f"unknown scene '{text}' (built-in: {', '.join(builtin_scenes())}; or the path of a scene .yaml file)")
+    return parse_scene(read_yaml(path), path)
+
+
+def parse_scene(data: dict[str, Any], path: Path) -> Scene:
+    """Validate the mapping read from a scene file."""
+    keys = ("description", "gripper_opening", "control", "force_filter_hz", "tracking_tolerance", "camera", "objects")
+    check_keys(data, keys, path, required=("description",))
+    scene = Scene(name=path.stem, description=str(data["description"]))
+    if "gripper_opening" in data:
+        scene = replace(scene, gripper_opening=number(data["gripper_opening"], path, "gripper_opening", minimum=0.0))
+    if "force_filter_hz" in data:
+        scene = replace(scene, force_filter_hz=number(data["force_filter_hz"], path, "force_filter_hz", positive=True))
+    if "tracking_tolerance" in data:
+        scene = replace(scene, tracking_tolerance=number(data["tracking_tolerance"], path, "tracking_tolerance", positive=True))
+    if "control" in data:
+        scene = replace(scene, control=_parse_control(data["control"], path))
+    if "camera" in data:
+        scene = replace(scene, camera=_parse_camera(data["camera"], path))
+    objects = data.get("objects") or []
+    if not isinstance(objects, list):
+        raise ConfigError(f"{path}: 'objects' must be a list")
+    return replace(scene, objects=tuple(_parse_object(item, path, index) for index, item in enumerate(objects)))
+
+
+def _parse_control(data: Any, path: Path) -> Control:
+    check_keys(data, ("position_gain", "arm_forces", "finger_force"), path, "control")
+    control = Control()
+    if "position_gain" in data:
+        gain = number(data["position_gain"], path, "control.position_gain", positive=True)
+        if gain > 1:
+            raise ConfigError(f"{path}: 'control.position_gain' must be in (0, 1] (got {gain:g})")
+        control = replace(control, position_gain=gain)
+    if "arm_forces" in data:
+        control = replace(control, arm_forces=vector(data["arm_forces"], 7, path, "control.arm_forces"))
+    if "finger_force" in data:
+        control = replace(control, finger_force=number(data["finger_force"], path, "control.finger_force", positive=True))
+    return control
+
+
+def _parse_camera(data: Any, path: Path) -> Camera:
+    check_keys(data, ("target", "distance", "yaw", "pitch", "width", "height", "fps"), path, "camera")
+    values: dict[str, Any] = {}
+    if "target" in data:
+        values["target"] = vector(data["target"], 3, path, "camera.target")
+    for key in ("distance", "fps"):
+        if key in data:
+            values[key] = number(data[key], path, f"camera.{key}", positive=True)
+    for key in ("yaw", "pitch"):
+        if key in data:
+            values[key] = number(data[key], path, f"camera.{key}")
+    for key in ("width", "height"):
+        if key in data:
+            values[key] = int(number(data[key], path, f"camera.{key}", minimum=16))
+    return Camera(**values)
+
+
+def _parse_object(data: Any, path: Path, index: int) -> SceneObject:
+    where = f"objects[{index}]"
+    keys = ("name", "shape", "size", "position", "orientation", "mass", "color", "friction")
+    check_keys(data, keys, path, where, required=("name", "shape", "size", "position"))
+    shape = data["shape"]
+    if shape not in SHAPES:
+        raise ConfigError(f"{path}: '{where}.shape' must be one of {', '.join(SHAPES)} (got {shape!r})")
+    size_length = {"box": 3, "cylinder": 2, "sphere": 1}[shape]
+    values: dict[str, Any] = {
+        "name": str(data["name"]),
+        "shape": shape,
+        "size": vector(data["size"], size_length, path, f"{where}.size"),
+        "position": vector(data["position"], 3, path, f"{where}.position"),
+    }
+    if any(value <= 0 for value in values["size"]):
+        raise ConfigError(f"{path}: '{where}.size' must be positive")
+    if "orientation" in data:
+        values["orientation"] = vector(data["orientation"], 3, path, f"{where}.orientation")
+    if "mass" in data:
+        values["mass"] = number(data["mass"], path, f"{where}.mass", minimum=0.0)
+    if "color" in data:
+        values["color"] = vector(data["color"], 4, path, f"{where}.color")
+    if "friction" in data:
+        values["friction"] = number(data["friction"], path, f"{where}.friction", minimum=0.0)
+    return SceneObject(**values)
