@@ -1,12 +1,13 @@
 """`make bench`: run every benchmark and print its table."""
 
-from benchmarks import bench_hsmm, bench_sim, bench_stl
+from benchmarks import bench_hsmm, bench_optim, bench_sim, bench_stl
 
 
 def main() -> None:
     bench_stl.main()
     bench_hsmm.main()
     bench_sim.main()
+    bench_optim.main([])
 
 
 if __name__ == "__main__":

@@ -3,11 +3,12 @@
 Each demonstration goes start -> L1 -> L2 -> L3 -> end in about 20 s through the regions of
 specs/regions.stl, the way a person guiding the arm would: minimum-jerk segments between
 via points, dwell times and segment durations that vary from one demonstration to the next,
-points spread around the region centres, a transit from L1 to L2 that bows by a varying amount
-towards (but never into) L4, and position-sensor noise. Sampled at 100 Hz.
+points spread around the region centres, a transit from L1 to L2 that passes just outside the
+corner of L4 (by a varying amount), and position-sensor noise. Sampled at 100 Hz.
 
-The learned skill therefore visits L1, L2 and L3 but violates phi1 and phi2: it passes near
-L4 around 7 s instead of inside it between 8 and 12 s, and it leaves L2 before 17 s.
+The learned skill therefore visits L1, L2 and L3 and stays in L2 from about 10 to 17 s, but
+violates phi1 and phi2: it passes beside L4 around 9 s instead of through it, and (for phi2)
+it is in L2 between 12 and 17 s.
 
 Run from the repository root: python demos/make_three_regions.py [--count 6] [--seed 5]
 """
@@ -28,6 +29,9 @@ RATE_HZ = 100
 START = np.array([0.42, 0.0, 0.40])
 END = np.array([0.62, 0.08, 0.40])
 SENSOR_NOISE_M = 0.0005
+END_HOLD_S = 0.5  # rest at the end
+# The L1 -> L2 transit passes this point (plus a bow in x), just outside L4's corner.
+VIA_X, VIA_Y = 0.445, 0.13
 
 
 def region_centres() -> dict[str, np.ndarray]:
@@ -55,15 +59,15 @@ def demonstration(rng: np.random.Generator, centres: dict[str, np.ndarray]) -> S
         return max(0.3, seconds + rng.normal(0, spread))
 
     l1, l2, l3 = near(centres["L1"], 0.012), near(centres["L2"], 0.012), near(centres["L3"], 0.012)
-    bow = rng.uniform(0.01, 0.028)  # how far the L1 -> L2 transit bows towards L4 (+x)
-    via = np.array([0.43 + bow, 0.02 + rng.normal(0, 0.02), 0.40 + rng.normal(0, 0.01)])
+    bow = rng.uniform(0.0, 0.01)  # how far the L1 -> L2 transit bows towards L4 (+x)
+    via = np.array([VIA_X + bow, VIA_Y + rng.normal(0, 0.01), 0.40 + rng.normal(0, 0.01)])
     phases = [
         ("start", START, jitter(1.2, 0.4)),
         ("to L1", l1, jitter(1.5, 0.3)),
-        ("in L1", l1, jitter(2.2, 0.6)),
-        ("to via", via, jitter(1.3, 0.3)),
-        ("to L2", l2, jitter(1.3, 0.3)),
-        ("in L2", l2, jitter(4.8, 1.0)),
+        ("in L1", l1, jitter(3.5, 0.6)),
+        ("to via", via, jitter(2.5, 0.3)),
+        ("to L2", l2, jitter(1.7, 0.3)),
+        ("in L2", l2, jitter(6.0, 0.8)),
         ("to L3", l3, jitter(1.9, 0.3)),
         ("in L3", l3, jitter(1.9, 0.5)),
         ("to end", near(END, 0.005), jitter(1.5, 0.3)),
@@ -72,7 +76,7 @@ def demonstration(rng: np.random.Generator, centres: dict[str, np.ndarray]) -> S
     for _, target, seconds in phases:
         clock += seconds
         waypoints.append((clock, target if _ != "start" else waypoints[-1][1]))
-    duration = max(20.0, clock + 0.5)
+    duration = max(20.0, clock + END_HOLD_S)
     times = np.arange(int(round(duration * RATE_HZ)) + 1) / RATE_HZ
     path = minimum_jerk(times, waypoints) + rng.normal(0, SENSOR_NOISE_M, size=(times.size, 3))
     return SignalTable(times, {"x": path[:, 0], "y": path[:, 1], "z": path[:, 2]})

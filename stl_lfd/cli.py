@@ -18,7 +18,7 @@ from typing import Iterator, Optional
 import typer
 
 from stl_lfd import __version__
-from stl_lfd.errors import ExecutionError, ModelError, StlLfdError
+from stl_lfd.errors import ConfigError, ExecutionError, ModelError, StlLfdError
 
 app = typer.Typer(
     help="Adapt demonstrated robot skills to Signal Temporal Logic requirements.",
@@ -251,6 +251,57 @@ def replay(
     if outcome.robustness is not None:
         print(f"{outcome.robustness:.10g}")
         print(f"{'satisfied' if outcome.robustness > 0 else 'violated'} ({outcome.semantics} robustness of {outcome.spec})", file=sys.stderr)
+
+
+class MethodOption(str, Enum):
+    pi = "pi"
+    logei = "logei"
+    random = "random"
+
+
+@app.command()
+def optimize(
+    task_file: Path = typer.Argument(..., help="Task file (YAML), e.g. configs/phi1.yaml."),
+    spec: Optional[Path] = typer.Option(None, "--spec", help="Use this STL spec instead of the task's."),
+    iterations: Optional[int] = typer.Option(None, "--iterations", "-N", help="Total number of trials N (default: the task's)."),
+    init: Optional[int] = typer.Option(None, "--init", "-M", help="Random (Sobol) initial trials M (default: the task's)."),
+    seed: Optional[int] = typer.Option(None, "--seed", help="Seed of the initial trials and of the acquisition optimiser."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Run directory (default: runs/<task name>)."),
+    resume: bool = typer.Option(False, "--resume", help="Continue the run in --out (or runs/<task name>) where it stopped."),
+    backend: Optional[BackendOption] = typer.Option(None, help="Execution backend (default: the task's)."),
+    method: Optional[MethodOption] = typer.Option(None, help="pi (the paper), logei, or random search (default: the task's)."),
+) -> None:
+    """Optimise a skill so that its execution satisfies the task's STL specification.
+
+    Runs the paper's Algorithm 1: M scrambled-Sobol trials, then probability of improvement on
+    a Gaussian process of the robustness, until N trials. Each trial is recorded in the run
+    directory as it finishes; the final summary.json is printed on stdout.
+
+    Examples:
+
+        stlopt optimize configs/phi1.yaml --seed 3 --out runs/phi1-seed3
+
+        stlopt optimize configs/phi1.yaml --out runs/phi1-seed3 --resume --iterations 48
+    """
+    from stl_lfd.optim import load_task, optimise, resume_run, start_run
+    from stl_lfd.progress import TrialPrinter
+
+    with user_errors():
+        task = load_task(task_file)
+        run_dir = out or Path("runs") / task.name
+        if resume:
+            given = {"--spec": spec, "--init": init, "--seed": seed, "--backend": backend, "--method": method}
+            changed = [name for name, value in given.items() if value is not None]
+            if changed:
+                raise ConfigError(f"{run_dir}: {', '.join(changed)} cannot change on --resume (the run keeps its task.yaml); only --iterations can")
+            prepared = resume_run(run_dir, iterations)
+        else:
+            overrides = dict(spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None)
+            prepared = start_run(task.with_overrides(**overrides), run_dir, lambda message: print(message, file=sys.stderr))
+        printer = TrialPrinter(prepared)
+        summary = optimise(prepared, printer.trial)
+        printer.done(summary)
+    print(json.dumps(summary, indent=2))
 
 
 @contextmanager

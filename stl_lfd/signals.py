@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -83,10 +84,17 @@ def write_signal_csv(table: SignalTable, destination: str | Path | TextIO) -> No
     body.write(",".join([TIME_COLUMN] + names) + "\n")
     np.savetxt(body, data, delimiter=",", fmt="%.12g")
     if isinstance(destination, (str, Path)) and str(destination) != "-":
-        Path(destination).write_text(body.getvalue())
+        write_atomically(Path(destination), body.getvalue())
     else:
         stream = sys.stdout if isinstance(destination, (str, Path)) else destination
         stream.write(body.getvalue())
+
+
+def write_atomically(path: Path, text: str) -> None:
+    """Write `text` to `path` through a temporary file, so that `path` is never half-written."""
+    temporary = path.with_name(f".{path.name}.tmp")
+    temporary.write_text(text)
+    os.replace(temporary, path)
 
 
 # --- Helper functions -----------------------------------------------------------------------

@@ -1,0 +1,139 @@
+"""Parameter spaces: which model parameters the optimiser moves, their bounds, and how a point
+becomes a model.
+
+A point `x` is a `d` vector, ordered: the selected state means (state by state, coordinate by
+coordinate), the selected duration means, then the selected transition entries. Bounds follow
+the paper: mean +- beta standard deviations of the state's covariance per coordinate, duration
+mean +- width duration standard deviations (never below one sample period), and [0, 1] for
+transition entries, whose rows are renormalised before retrieval.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from stl_lfd.errors import ConfigError
+from stl_lfd.hsmm import HSMM
+from stl_lfd.optim.task import Parameters
+
+
+@dataclass(frozen=True)
+class ParameterSpace:
+    """The optimised parameters of one model.
+
+    Attributes:
+        names: `d` readable names, such as `mean[2].x`, `duration[3]`, `transition[2->3]` (1-based).
+        lower, upper: `d` bounds.
+        initial: `d` values of the unmodified model (inside the bounds).
+    """
+
+    names: tuple[str, ...]
+    lower: np.ndarray
+    upper: np.ndarray
+    initial: np.ndarray
+    mean_slots: tuple[tuple[int, int], ...]
+    duration_slots: tuple[int, ...]
+    transition_slots: tuple[tuple[int, int], ...]
+
+    @property
+    def dimension(self) -> int:
+        return len(self.names)
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """`2 x d`: lower bounds, then upper bounds (BoTorch's convention)."""
+        return np.vstack([self.lower, self.upper])
+
+    def apply(self, model: HSMM, x: np.ndarray) -> HSMM:
+        """A copy of `model` with the parameters of point `x` (`d`), clipped to the bounds."""
+        x = np.clip(np.asarray(x, dtype=float), self.lower, self.upper)
+        changed = copy.deepcopy(model)
+        changed.means_ = np.array(model.means_, dtype=float)
+        changed.duration_means_ = np.array(model.duration_means_, dtype=float)
+        changed.transmat_ = np.array(model.transmat_, dtype=float)
+        values = iter(x)
+        for state, coordinate in self.mean_slots:
+            changed.means_[state, coordinate] = next(values)
+        for state in self.duration_slots:
+            changed.duration_means_[state] = next(values)
+        for source, target in self.transition_slots:
+            changed.transmat_[source, target] = next(values)
+        if self.transition_slots:
+            changed.transmat_ = changed.normalized_transmat()
+        return changed
+
+    def as_dict(self, x: np.ndarray) -> dict[str, float]:
+        return {name: float(value) for name, value in zip(self.names, x)}
+
+
+def build_space(model: HSMM, parameters: Parameters, source: Path | str = "task") -> ParameterSpace:
+    """The space that `parameters` (from a task file) selects on `model`."""
+    K = model.n_states
+    names: list[str] = []
+    lower: list[float] = []
+    upper: list[float] = []
+    initial: list[float] = []
+
+    def add(name: str, value: float, low: float, high: float) -> None:
+        names.append(name)
+        initial.append(value)
+        lower.append(low)
+        upper.append(high)
+
+    means = parameters.means
+    mean_slots = []
+    for state in _states(means.components, K, source, "parameters.means.components"):
+        stds = np.sqrt(np.diag(model.covars_[state]))
+        for name in means.coordinates:
+            if name not in model.signal_names_:
+                raise ConfigError(f"{source}: 'parameters.means.coordinates' names {name}, which the model does not have ({', '.join(model.signal_names_)})")
+            coordinate = model.signal_names_.index(name)
+            value, spread = model.means_[state, coordinate], means.beta * stds[coordinate]
+            add(f"mean[{state + 1}].{name}", value, value - spread, value + spread)
+            mean_slots.append((state, coordinate))
+
+    durations = parameters.durations
+    duration_slots = []
+    for state in _states(durations.components, K, source, "parameters.durations.components"):
+        value, spread = model.duration_means_[state], durations.width * model.duration_stds_[state]
+        add(f"duration[{state + 1}]", value, max(value - spread, model.sample_period_), value + spread)
+        duration_slots.append(state)
+
+    transition_slots = transition_entries(K, parameters.transitions)
+    probabilities = model.normalized_transmat()
+    for source_state, target in transition_slots:
+        add(f"transition[{source_state + 1}->{target + 1}]", probabilities[source_state, target], 0.0, 1.0)
+
+    return ParameterSpace(
+        names=tuple(names),
+        lower=np.array(lower),
+        upper=np.array(upper),
+        initial=np.array(initial),
+        mean_slots=tuple(mean_slots),
+        duration_slots=tuple(duration_slots),
+        transition_slots=tuple(transition_slots),
+    )
+
+
+def transition_entries(K: int, kind: str) -> list[tuple[int, int]]:
+    """(from, to) entries (0-based): `full` every off-diagonal one, `band` the paper's reduced
+    set of successors i+1 and i+2, `none` nothing."""
+    if kind == "none":
+        return []
+    if kind == "full":
+        return [(i, j) for i in range(K) for j in range(K) if i != j]
+    return [(i, j) for i in range(K) for j in (i + 1, i + 2) if j < K]
+
+
+def _states(components: tuple[int, ...] | str, K: int, source: Path | str, key: str) -> list[int]:
+    if components == "all":
+        return list(range(K))
+    for state in components:
+        if state > K:
+            raise ConfigError(f"{source}: '{key}' names state {state}, but the model has {K} states (numbered 1-{K})")
+    return [state - 1 for state in components]
+

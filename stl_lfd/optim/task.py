@@ -1,0 +1,210 @@
+"""Task files: what to optimise, against which spec, how to execute it, with what budget.
+
+A task file is YAML (see `configs/phi1.yaml`); paths in it are relative to the file. States
+are numbered from 1, as `stlopt learn` prints them. Every key is checked: unknown keys, wrong
+types and bounds that make no sense are `ConfigError`s naming the file and the key.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from stl_lfd.errors import ConfigError
+from stl_lfd.yamlfile import check_keys, integer, number, read_yaml
+
+METHODS = ("pi", "logei", "random")
+TRANSITIONS = ("none", "band", "full")
+SEMANTICS = ("new", "classic")
+COORDINATES = ("x", "y", "z")
+
+
+@dataclass(frozen=True)
+class MeanParameters:
+    """State means to optimise: `components` (1-based), `coordinates`, bounds mean +- beta std."""
+
+    components: tuple[int, ...] = ()
+    coordinates: tuple[str, ...] = COORDINATES
+    beta: float = 2.0
+
+
+@dataclass(frozen=True)
+class DurationParameters:
+    """Duration means to optimise (1-based states, or all), bounds mean +- width std."""
+
+    components: tuple[int, ...] | str = ()
+    width: float = 1.0
+
+
+@dataclass(frozen=True)
+class Parameters:
+    means: MeanParameters = field(default_factory=MeanParameters)
+    durations: DurationParameters = field(default_factory=DurationParameters)
+    transitions: str = "none"
+
+
+@dataclass(frozen=True)
+class Optimizer:
+    """Algorithm 1's budget: `initial` (M) Sobol trials, then `method` until `trials` (N)."""
+
+    method: str = "pi"
+    initial: int = 8
+    trials: int = 32
+    seed: int = 0
+    xi: float = 0.1
+
+
+@dataclass(frozen=True)
+class Task:
+    """A validated task file; paths are absolute or relative to the working directory."""
+
+    name: str
+    spec: Path
+    model: Path | None
+    demos: Path | None
+    states: int
+    scene: str
+    backend: str
+    semantics: str
+    nu: float
+    duration: float
+    rate: float
+    parameters: Parameters
+    optimizer: Optimizer
+    source: Path
+
+    def with_overrides(self, **changes: Any) -> "Task":
+        """A copy with command-line overrides (`spec`, `backend`, `seed`, `initial`, `trials`, `method`)."""
+        optimizer_keys = {"seed", "initial", "trials", "method"}
+        optimizer = replace(self.optimizer, **{k: v for k, v in changes.items() if k in optimizer_keys and v is not None})
+        task = replace(self, optimizer=optimizer, **{k: v for k, v in changes.items() if k not in optimizer_keys and v is not None})
+        check_budget(task.optimizer, task.source)
+        return task
+
+    def to_yaml_dict(self) -> dict[str, Any]:
+        """The task as it is used, in the task-file format (paths made absolute)."""
+        means, durations = self.parameters.means, self.parameters.durations
+        data: dict[str, Any] = {"name": self.name, "spec": str(self.spec.resolve())}
+        if self.model is not None:
+            data["model"] = str(self.model.resolve())
+        if self.demos is not None:
+            data["demos"] = str(self.demos.resolve())
+            data["states"] = self.states
+        data.update(scene=self.scene, backend=self.backend, semantics=self.semantics, nu=self.nu, duration=self.duration, rate=self.rate)
+        data["parameters"] = {
+            "means": {"components": list(means.components), "coordinates": list(means.coordinates), "beta": means.beta},
+            "durations": {"components": durations.components if isinstance(durations.components, str) else list(durations.components), "width": durations.width},
+            "transitions": self.parameters.transitions,
+        }
+        opt = self.optimizer
+        data["optimizer"] = {"method": opt.method, "initial": opt.initial, "trials": opt.trials, "seed": opt.seed, "xi": opt.xi}
+        return data
+
+
+TOP_KEYS = ("name", "spec", "model", "demos", "states", "scene", "backend", "semantics", "nu", "duration", "rate", "parameters", "optimizer")
+
+
+def load_task(path: str | Path) -> Task:
+    """Read and validate a task file."""
+    path = Path(path)
+    data = read_yaml(path)
+    check_keys(data, TOP_KEYS, path, required=("spec", "duration"))
+    if ("model" in data) == ("demos" in data):
+        raise ConfigError(f"{path}: give exactly one of 'model' (a model file) or 'demos' (a folder to learn from)")
+    base = path.parent
+    semantics = _choice(data.get("semantics", "new"), SEMANTICS, path, "semantics")
+    backend = _choice(data.get("backend", "pybullet"), ("pybullet", "kinematic"), path, "backend")
+    task = Task(
+        name=str(data.get("name", path.stem)),
+        spec=_existing(base, data["spec"], path, "spec"),
+        model=_existing(base, data["model"], path, "model") if "model" in data else None,
+        demos=_existing(base, data["demos"], path, "demos") if "demos" in data else None,
+        states=integer(data.get("states", 6), path, "states", minimum=1),
+        scene=str(data.get("scene", "free_space")),
+        backend=backend,
+        semantics=semantics,
+        nu=number(data.get("nu", 1.0), path, "nu", positive=True),
+        duration=number(data["duration"], path, "duration", positive=True),
+        rate=number(data.get("rate", 100.0), path, "rate", positive=True),
+        parameters=_parameters(data.get("parameters", {}), path),
+        optimizer=_optimizer(data.get("optimizer", {}), path),
+        source=path,
+    )
+    check_budget(task.optimizer, path)
+    return task
+
+
+def check_budget(optimizer: Optimizer, path: Path) -> None:
+    if optimizer.initial < 1 or optimizer.trials < 1:
+        raise ConfigError(f"{path}: 'optimizer.initial' and 'optimizer.trials' must be at least 1")
+    if optimizer.initial > optimizer.trials:
+        raise ConfigError(
+            f"{path}: 'optimizer.initial' ({optimizer.initial}) exceeds 'optimizer.trials' ({optimizer.trials}), the total number of trials"
+        )
+
+
+def _parameters(data: Any, path: Path) -> Parameters:
+    check_keys(data, ("means", "durations", "transitions"), path, "parameters")
+    means, durations = MeanParameters(), DurationParameters()
+    if "means" in data:
+        item = check_keys(data["means"], ("components", "coordinates", "beta"), path, "parameters.means", required=("components",))
+        coordinates = tuple(item.get("coordinates", COORDINATES))
+        for coordinate in coordinates:
+            if coordinate not in COORDINATES:
+                raise ConfigError(f"{path}: 'parameters.means.coordinates' may hold x, y, z (got {coordinate!r})")
+        means = MeanParameters(
+            components=_components(item["components"], path, "parameters.means.components", allow_all=False),
+            coordinates=coordinates,
+            beta=number(item.get("beta", 2.0), path, "parameters.means.beta", positive=True),
+        )
+    if "durations" in data:
+        item = check_keys(data["durations"], ("components", "width"), path, "parameters.durations", required=("components",))
+        durations = DurationParameters(
+            components=_components(item["components"], path, "parameters.durations.components", allow_all=True),
+            width=number(item.get("width", 1.0), path, "parameters.durations.width", positive=True),
+        )
+    transitions = _choice(data.get("transitions", "none"), TRANSITIONS, path, "parameters.transitions")
+    parameters = Parameters(means, durations, transitions)
+    if not means.components and not durations.components and transitions == "none":
+        raise ConfigError(f"{path}: 'parameters' selects nothing to optimise")
+    return parameters
+
+
+def _optimizer(data: Any, path: Path) -> Optimizer:
+    check_keys(data, ("method", "initial", "trials", "seed", "xi"), path, "optimizer")
+    defaults = Optimizer()
+    return Optimizer(
+        method=_choice(data.get("method", defaults.method), METHODS, path, "optimizer.method"),
+        initial=integer(data.get("initial", defaults.initial), path, "optimizer.initial", minimum=1),
+        trials=integer(data.get("trials", defaults.trials), path, "optimizer.trials", minimum=1),
+        seed=integer(data.get("seed", defaults.seed), path, "optimizer.seed", minimum=0),
+        xi=number(data.get("xi", defaults.xi), path, "optimizer.xi", minimum=0.0),
+    )
+
+
+def _components(value: Any, path: Path, key: str, allow_all: bool) -> tuple[int, ...] | str:
+    if allow_all and value == "all":
+        return "all"
+    if not isinstance(value, list) or not value:
+        expected = "a non-empty list of state numbers" + (" or 'all'" if allow_all else "")
+        raise ConfigError(f"{path}: '{key}' must be {expected} (got {value!r})")
+    numbers = tuple(integer(item, path, key, minimum=1) for item in value)
+    if len(set(numbers)) != len(numbers):
+        raise ConfigError(f"{path}: '{key}' lists a state twice ({list(numbers)})")
+    return numbers
+
+
+def _choice(value: Any, choices: tuple[str, ...], path: Path, key: str) -> str:
+    if value not in choices:
+        raise ConfigError(f"{path}: '{key}' must be one of {', '.join(choices)} (got {value!r})")
+    return value
+
+
+def _existing(base: Path, value: Any, path: Path, key: str) -> Path:
+    if not isinstance(value, str):
+        raise ConfigError(f"{path}: '{key}' must be a path (got {value!r})")
+    resolved = Path(value) if Path(value).is_absolute() else base / value
+    if not resolved.exists():
+        raise ConfigError(f"{path}: '{key}' names {value}, which does not exist (paths are relative to the task file)")
+    return resolved

@@ -1,0 +1,74 @@
+"""The trial loop on a cheap synthetic objective (no simulation)."""
+
+import numpy as np
+import pytest
+
+from stl_lfd.optim.loop import Outcome, best_trial, run_trials
+from stl_lfd.optim.task import Optimizer
+
+BOUNDS = np.array([[0.0, -1.0, 2.0], [1.0, 1.0, 4.0]])
+TARGET = np.array([0.7, 0.2, 3.1])
+
+
+def objective(x):
+    return Outcome(0.3 - float(np.linalg.norm((x - TARGET) / (BOUNDS[1] - BOUNDS[0]))))
+
+
+def run(optimizer, history=(), function=objective):
+    return run_trials(function, BOUNDS, optimizer, list(history), lambda trial, payload: None)
+
+
+def points(history):
+    return np.array([trial.x for trial in history])
+
+
+def test_the_same_seed_gives_the_same_trials():
+    optimizer = Optimizer("pi", initial=4, trials=8, seed=3)
+    first, second = run(optimizer), run(optimizer)
+    assert np.array_equal(points(first), points(second))
+    other = run(Optimizer("pi", initial=4, trials=8, seed=4))
+    assert not np.allclose(points(first)[:4], points(other)[:4])
+
+
+def test_resuming_from_a_recorded_history_continues_exactly():
+    optimizer = Optimizer("pi", initial=4, trials=9, seed=1)
+    uninterrupted = run(optimizer)
+    partial = run(Optimizer("pi", initial=4, trials=6, seed=1))
+    resumed = run(optimizer, partial)
+    assert [trial.phase for trial in resumed] == ["sobol"] * 4 + ["pi"] * 5
+    assert np.array_equal(points(resumed), points(uninterrupted))
+
+
+@pytest.mark.parametrize("method", ["pi", "logei", "random"])
+def test_every_method_stays_inside_the_bounds_and_shares_the_initial_design(method):
+    history = run(Optimizer(method, initial=3, trials=7, seed=0))
+    x = points(history)
+    assert np.all((x >= BOUNDS[0]) & (x <= BOUNDS[1]))
+    assert np.array_equal(x[:3], points(run(Optimizer("random", initial=3, trials=3, seed=0))))
+    assert [trial.phase for trial in history][3:] == [method] * 4
+
+
+def test_the_acquisition_improves_on_the_initial_design():
+    history = run(Optimizer("pi", initial=5, trials=20, seed=0))
+    best_initial = max(trial.robustness for trial in history[:5])
+    assert best_trial(history).robustness > best_initial
+    assert best_trial(history).robustness > 0.2
+
+
+def test_a_failing_trial_is_recorded_and_the_loop_goes_on():
+    calls = []
+
+    def flaky(x):
+        calls.append(x)
+        if len(calls) == 2:
+            raise RuntimeError("simulation exploded")
+        if len(calls) == 6:
+            return Outcome(float("nan"))
+        return objective(x)
+
+    history = run(Optimizer("pi", initial=3, trials=8, seed=0), function=flaky)
+    assert len(history) == 8
+    assert history[1].status == "failed" and "simulation exploded" in history[1].error
+    assert history[5].status == "failed" and "nan" in history[5].error
+    assert history[1].robustness is None and not history[1].satisfied
+    assert all(trial.status == "ok" for index, trial in enumerate(history) if index not in (1, 5))

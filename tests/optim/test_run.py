@@ -1,0 +1,122 @@
+"""Whole runs from task files on the kinematic backend: the run directory, resume, refusals."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from stl_lfd.cli import app
+from stl_lfd.errors import ConfigError, SpecError
+from stl_lfd.optim import RunDirectory, build_space, load_task, optimise, resume_run, start_run
+from tests.conftest import ROOT
+
+runner = CliRunner()
+
+
+def small_task(tmp_path: Path, model_file: Path, spec: str = "phi1", duration: float = 22, extra: str = "") -> Path:
+    path = tmp_path / f"{spec}.yaml"
+    path.write_text(
+        f"name: small\nspec: {ROOT / 'specs' / (spec + '.stl')}\nmodel: {model_file}\nbackend: kinematic\n"
+        f"duration: {duration}\nrate: 50\n"
+        "parameters:\n  means: {components: [2, 3]}\n  durations: {components: all}\n"
+        "optimizer: {initial: 3, trials: 5, seed: 2}\n" + extra
+    )
+    return path
+
+
+def test_a_run_writes_its_directory_as_it_goes(tmp_path, learned_model_file):
+    task = load_task(small_task(tmp_path, learned_model_file))
+    summary = optimise(start_run(task, tmp_path / "run"))
+    run = tmp_path / "run"
+    assert {path.name for path in run.iterdir()} == {"task.yaml", "model.npz", "trials.jsonl", "signals", "best_model.npz", "summary.json"}
+    lines = (run / "trials.jsonl").read_text().splitlines()
+    assert len(lines) == 5
+    first = json.loads(lines[0])
+    assert set(first) >= {"trial", "parameters", "robustness", "satisfied", "wall_seconds", "status"}
+    assert len(first["parameters"]) == 12
+    assert sorted(path.name for path in (run / "signals").iterdir()) == ["initial.csv"] + [f"trial-000{n}.csv" for n in range(1, 6)]
+    assert json.loads((run / "summary.json").read_text()) == summary
+    assert summary["trials"] == 5 and summary["complete"]
+    assert summary["initial_robustness"] < 0  # the learned skill violates phi1
+    best = max(json.loads(line)["robustness"] for line in lines)
+    assert summary["best_robustness"] == best
+    assert set(summary) >= {"initial_robustness", "best_robustness", "best_trial", "satisfied", "trials", "wall_seconds"}
+
+
+def test_a_killed_run_resumes_without_repeating_or_losing_trials(tmp_path, learned_model_file):
+    task = load_task(small_task(tmp_path, learned_model_file))
+    optimise(start_run(task, tmp_path / "whole"))
+    interrupted = tmp_path / "interrupted"
+    optimise(start_run(task.with_overrides(trials=4), interrupted))
+    # a kill while the fourth line was being written leaves a partial line behind
+    trials_file = interrupted / "trials.jsonl"
+    lines = trials_file.read_text().splitlines()
+    trials_file.write_text("\n".join(lines[:3]) + "\n" + lines[3][:40])
+    summary = optimise(resume_run(interrupted, trials=5))
+    assert summary["trials"] == 5
+    resumed = [json.loads(line) for line in trials_file.read_text().splitlines()]
+    whole = [json.loads(line) for line in (tmp_path / "whole" / "trials.jsonl").read_text().splitlines()]
+    assert [trial["trial"] for trial in resumed] == [1, 2, 3, 4, 5]
+    assert [trial["x"] for trial in resumed] == [trial["x"] for trial in whole]
+    assert [trial["robustness"] for trial in resumed] == [trial["robustness"] for trial in whole]
+
+
+def test_a_spec_looking_past_the_rollout_is_refused_before_any_trial(tmp_path, learned_model_file):
+    task = load_task(small_task(tmp_path, learned_model_file, duration=15))
+    with pytest.raises(ConfigError, match="looks 17 s ahead but rollouts last 15 s"):
+        start_run(task, tmp_path / "run")
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_spec_on_signals_that_rollouts_do_not_record_is_refused(tmp_path, learned_model_file):
+    spec = tmp_path / "torque.stl"
+    spec.write_text("G torque < 1\n")
+    task = load_task(small_task(tmp_path, learned_model_file)).with_overrides(spec=spec)
+    with pytest.raises(SpecError, match="signal torque is not recorded"):
+        start_run(task, tmp_path / "run")
+    assert not (tmp_path / "run").exists() and not list(tmp_path.glob(".run.*"))
+
+
+def test_cli_optimize_prints_the_summary_and_protects_existing_runs(tmp_path, learned_model_file):
+    task = small_task(tmp_path, learned_model_file)
+    out = tmp_path / "cli-run"
+    result = runner.invoke(app, ["optimize", str(task), "--out", str(out), "--iterations", "4", "--init", "2", "--seed", "5"])
+    assert result.exit_code == 0, result.stderr
+    summary = json.loads(result.stdout)
+    assert summary["trials"] == 4 and summary["initial_trials"] == 2 and summary["seed"] == 5
+    assert "unoptimised skill: robustness" in result.stderr and "4/5" not in result.stderr
+    again = runner.invoke(app, ["optimize", str(task), "--out", str(out)])
+    assert again.exit_code == 5 and "exists; continue it with --resume" in again.stderr
+    changed = runner.invoke(app, ["optimize", str(task), "--out", str(out), "--resume", "--seed", "1"])
+    assert changed.exit_code == 5 and "--seed cannot change on --resume" in changed.stderr
+    extended = runner.invoke(app, ["optimize", str(task), "--out", str(out), "--resume", "--iterations", "5"])
+    assert extended.exit_code == 0, extended.stderr
+    assert json.loads(extended.stdout)["trials"] == 5
+    assert "resuming after trial 4" in extended.stderr
+
+
+def test_replay_of_a_run_uses_its_spec_and_best_trial(tmp_path, learned_model_file):
+    out = tmp_path / "run"
+    optimise(start_run(load_task(small_task(tmp_path, learned_model_file)), out))
+    summary = json.loads((out / "summary.json").read_text())
+    video = tmp_path / "best.gif"
+    result = runner.invoke(app, ["replay", str(out), "--video", str(video), "--duration", "0.5"])
+    assert result.exit_code == 0, result.stderr
+    assert video.exists() and "new robustness of" in result.stderr
+    missing = runner.invoke(app, ["replay", str(out), "--trial", "9", "--video", str(video)])
+    assert missing.exit_code == 5 and "no trial 9" in missing.stderr
+    assert summary["best_trial"] is not None
+
+
+@pytest.mark.slow
+def test_the_paper_budget_satisfies_phi1_on_the_kinematic_backend(tmp_path):
+    task = load_task(ROOT / "configs" / "phi1.yaml").with_overrides(backend="kinematic")
+    summary = optimise(start_run(task, tmp_path / "phi1"))
+    assert summary["initial_robustness"] < 0
+    assert summary["satisfied"] and summary["best_robustness"] > 0.005
+    run = RunDirectory(tmp_path / "phi1")
+    space = build_space(run.model(), task.parameters)
+    for trial in run.trials():
+        assert np.all((trial.x >= space.lower) & (trial.x <= space.upper)), trial.trial

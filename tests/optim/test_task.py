@@ -1,0 +1,72 @@
+from pathlib import Path
+
+import pytest
+
+from stl_lfd.errors import ConfigError
+from stl_lfd.optim import build_space, load_task
+from tests.conftest import ROOT
+
+CONFIGS = ROOT / "configs"
+
+
+@pytest.mark.parametrize("name, dimension", [("phi1", 12), ("phi2", 21)])
+def test_the_paper_tasks_select_the_paper_parameter_sets(name, dimension, learned_model):
+    task = load_task(CONFIGS / f"{name}.yaml")
+    assert task.spec == CONFIGS / ".." / "specs" / f"{name}.stl"
+    assert task.optimizer.initial == 8 and task.optimizer.trials == 32 and task.optimizer.method == "pi"
+    assert task.semantics == "new"
+    assert build_space(learned_model, task.parameters).dimension == dimension
+
+
+def write_task(tmp_path: Path, body: str) -> Path:
+    path = tmp_path / "task.yaml"
+    header = f"spec: {ROOT / 'specs' / 'phi1.stl'}\ndemos: {ROOT / 'demos' / 'three_regions'}\nduration: 22\n"
+    path.write_text(header + body)
+    return path
+
+
+GOOD_PARAMETERS = "parameters:\n  means: {components: [2]}\n"
+
+
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        ("parameters:\n  means: {components: [2], bta: 2}\n", "unknown key 'parameters.means.bta'"),
+        ("paramters: {}\n", "unknown key 'paramters'"),
+        (GOOD_PARAMETERS + "optimizer: {initial: 10, trials: 5}\n", r"'optimizer.initial' \(10\) exceeds 'optimizer.trials' \(5\)"),
+        (GOOD_PARAMETERS + "optimizer: {method: ucb}\n", "'optimizer.method' must be one of pi, logei, random"),
+        (GOOD_PARAMETERS + "semantics: fuzzy\n", "'semantics' must be one of new, classic"),
+        (GOOD_PARAMETERS + "nu: -1\n", "'nu' must be positive"),
+        ("parameters:\n  means: {components: [2], beta: 0}\n", "'parameters.means.beta' must be positive"),
+        ("parameters:\n  means: {components: []}\n", "'parameters.means.components' must be a non-empty list"),
+        ("parameters:\n  means: {components: [2], coordinates: [w]}\n", "may hold x, y, z"),
+        ("parameters:\n  transitions: sparse\n", "'parameters.transitions' must be one of none, band, full"),
+        ("parameters: {}\n", "selects nothing to optimise"),
+        (GOOD_PARAMETERS + "model: nowhere.npz\n", "exactly one of 'model'"),
+    ],
+)
+def test_bad_task_files_name_the_file_and_the_key(tmp_path, body, message):
+    path = write_task(tmp_path, body)
+    with pytest.raises(ConfigError, match=message) as error:
+        load_task(path)
+    assert str(path) in str(error.value)
+
+
+def test_missing_files_are_named_relative_to_the_task(tmp_path):
+    path = tmp_path / "task.yaml"
+    path.write_text("spec: missing.stl\ndemos: .\nduration: 22\n" + GOOD_PARAMETERS)
+    with pytest.raises(ConfigError, match="'spec' names missing.stl, which does not exist"):
+        load_task(path)
+
+
+def test_states_beyond_the_model_are_refused(tmp_path, learned_model):
+    task = load_task(write_task(tmp_path, "parameters:\n  durations: {components: [7]}\n"))
+    with pytest.raises(ConfigError, match="names state 7, but the model has 6 states"):
+        build_space(learned_model, task.parameters, task.source)
+
+
+def test_command_line_overrides_are_checked_like_the_file(tmp_path):
+    task = load_task(write_task(tmp_path, GOOD_PARAMETERS))
+    assert task.with_overrides(seed=4, trials=40).optimizer.seed == 4
+    with pytest.raises(ConfigError, match="exceeds"):
+        task.with_overrides(initial=50)
