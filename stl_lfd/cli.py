@@ -304,6 +304,33 @@ def optimize(
     print(json.dumps(summary, indent=2))
 
 
+@app.command()
+def report(
+    run_dir: Path = typer.Argument(..., help="Run directory written by 'stlopt optimize'."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Folder for the figures and index.html (default: RUN_DIR/report)."),
+    compare: list[Path] = typer.Option([], "--compare", help="Another run directory to compare best-so-far robustness with (repeatable)."),
+    gp_parameter: list[str] = typer.Option([], "--gp-parameter", help="Parameter for the GP slice figure, e.g. 'mean[3].x' (repeatable; default: the two most relevant)."),
+) -> None:
+    """Write the figures of an optimisation run (PNG) and an index.html that shows them.
+
+    Figures: end-effector paths, signed distance to each region in its time window,
+    robustness per trial, GP slices, transition graphs before/after, duration means per
+    trial, and contact forces (when recorded). The paths of the files go to stdout.
+
+    Example:
+
+        stlopt report runs/phi1 --compare runs/phi1-random
+    """
+    from stl_lfd.report import write_report
+
+    with user_errors():
+        index, pictures = write_report(run_dir, out, compare, gp_parameter or None)
+    for path in pictures:
+        print(path)
+    print(index)
+    print(f"wrote {len(pictures)} figures; open {index}", file=sys.stderr)
+
+
 @contextmanager
 def _progress_bar(description: str, total: int) -> Iterator:
     """A rich progress bar on stderr; yields a function taking the number of steps done."""

@@ -1,0 +1,234 @@
+"""The figures of an optimisation run (the paper's plots). Each function takes a loaded run and
+returns a matplotlib Figure, or None when the run lacks the data for it."""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.colors import to_rgba
+from matplotlib.figure import Figure
+from matplotlib.patches import FancyArrowPatch, Rectangle
+
+from stl_lfd.hsmm import HSMM, retrieve
+from stl_lfd.report.run_data import RunData, signed_distance
+
+BEST = "tab:red"
+INITIAL = "0.2"
+REGION_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
+
+
+def _trial_colors(count: int) -> list[tuple]:
+    """Light to dark grey-blue in trial order."""
+    return [to_rgba("tab:blue", alpha=0.15 + 0.6 * index / max(count - 1, 1)) for index in range(count)]
+
+
+def trajectories(run: RunData) -> Figure:
+    """End-effector paths of every trial on the x-y plane; best in red; regions as patches."""
+    figure = Figure(figsize=(6.5, 6), layout="constrained")
+    axes = figure.subplots()
+    for index, (name, box) in enumerate(run.regions.items()):
+        if "x" in box and "y" in box:
+            (x0, x1), (y0, y1) = box["x"], box["y"]
+            color = REGION_COLORS[index % len(REGION_COLORS)]
+            axes.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, color=color, alpha=0.25, lw=0))
+            axes.text((x0 + x1) / 2, (y0 + y1) / 2, name, ha="center", va="center", fontsize=11, color=color, weight="bold")
+    numbers = [trial.trial for trial in run.trials if trial.trial in run.signals]
+    for color, number in zip(_trial_colors(len(numbers)), numbers):
+        table = run.signals[number]
+        axes.plot(table.columns["x"], table.columns["y"], color=color, lw=1)
+    if 0 in run.signals:
+        axes.plot(run.signals[0].columns["x"], run.signals[0].columns["y"], color=INITIAL, lw=1.5, ls="--", label="unoptimised")
+    if run.best is not None and run.best.trial in run.signals:
+        best = run.signals[run.best.trial]
+        axes.plot(best.columns["x"], best.columns["y"], color=BEST, lw=2.2, label=f"best (trial {run.best.trial})")
+    axes.set(xlabel="x (m)", ylabel="y (m)", title=f"{run.task.name}: end-effector paths of {len(numbers)} trials", aspect="equal")
+    axes.legend(loc="best")
+    return figure
+
+
+def region_distances(run: RunData) -> Figure | None:
+    """Per region constraint of the spec: signed distance (negative inside) over its time window
+    for every trial, the boundary at 0, the best trial in red."""
+    constraints = [c for c in run.constraints if c.region in run.regions]
+    if not constraints or not run.signals:
+        return None
+    figure = Figure(figsize=(5 * len(constraints), 3.8), layout="constrained")
+    axes_list = np.atleast_1d(figure.subplots(1, len(constraints), squeeze=False)[0])
+    numbers = [trial.trial for trial in run.trials if trial.trial in run.signals]
+    best = run.best.trial if run.best is not None else None
+    for axes, constraint in zip(axes_list, constraints):
+        box = run.regions[constraint.region]
+        for color, number in zip(_trial_colors(len(numbers)), numbers):
+            _plot_distance(axes, run.signals[number], box, constraint.interval, color, 1.0)
+        if best in run.signals:
+            _plot_distance(axes, run.signals[best], box, constraint.interval, BEST, 2.2)
+        axes.axhline(0.0, color="k", lw=1)
+        window = "whole trace" if constraint.interval is None else f"[{constraint.interval[0]:g}, {constraint.interval[1]:g}] s"
+        axes.set(title=f"{constraint.kind} {constraint.region}, {window}", xlabel="t (s)", ylabel="signed distance (m), < 0 inside")
+    return figure
+
+
+def _plot_distance(axes, table, box, interval, color, width) -> None:
+    times = table.times
+    inside = np.ones_like(times, dtype=bool) if interval is None else (times >= interval[0] - 1e-9) & (times <= interval[1] + 1e-9)
+    axes.plot(times[inside], signed_distance(table, box)[inside], color=color, lw=width)
+
+
+def robustness_per_trial(run: RunData) -> Figure:
+    """Robustness of each trial and the best so far; Sobol trials distinguished from the rest."""
+    figure = Figure(figsize=(7.5, 4), layout="constrained")
+    axes = figure.subplots()
+    _robustness_curves(axes, run, label_prefix="")
+    axes.axhline(0.0, color="k", lw=1)
+    axes.axhline(run.summary["initial_robustness"], color=INITIAL, ls="--", lw=1, label="unoptimised")
+    axes.set(xlabel="trial", ylabel=f"{run.task.semantics} robustness", title=f"{run.task.name}: robustness per trial")
+    axes.legend(loc="lower right")
+    return figure
+
+
+def _robustness_curves(axes, run: RunData, label_prefix: str, color: str = "tab:blue") -> None:
+    numbers = np.array([trial.trial for trial in run.trials])
+    values = np.array([trial.robustness if trial.robustness is not None else np.nan for trial in run.trials])
+    initial = np.array([trial.phase == "sobol" for trial in run.trials])
+    best_so_far = np.fmax.accumulate(np.where(np.isnan(values), -np.inf, values))
+    if not label_prefix:
+        axes.scatter(numbers[initial], values[initial], marker="s", color="0.5", label="initial (Sobol)", zorder=3)
+        axes.scatter(numbers[~initial], values[~initial], marker="o", color=color, label=f"{run.task.optimizer.method} trials", zorder=3)
+    axes.step(numbers, np.where(np.isfinite(best_so_far), best_so_far, np.nan), where="post", color=color, lw=2, label=f"{label_prefix}best so far")
+
+
+def compare_runs(runs: list[RunData]) -> Figure:
+    """Best-so-far robustness of several runs on one plot."""
+    figure = Figure(figsize=(7.5, 4), layout="constrained")
+    axes = figure.subplots()
+    for index, run in enumerate(runs):
+        label = f"{run.path.name} ({run.task.optimizer.method}, {run.task.semantics}): "
+        _robustness_curves(axes, run, label_prefix=label, color=f"C{index}")
+    axes.axhline(0.0, color="k", lw=1)
+    axes.set(xlabel="trial", ylabel="robustness", title="best so far")
+    axes.legend(loc="lower right", fontsize=8)
+    return figure
+
+
+def gp_slices(run: RunData, parameters: list[str] | None = None) -> Figure | None:
+    """GP mean and 95 % band along one or two parameters through the best point, with the
+    observations (projected). Default parameters: the two with the shortest GP lengthscales."""
+    X, Y = run.observations()
+    if len(Y) < 3 or run.best is None:
+        return None
+    from stl_lfd.optim.acquisition import fit_gp
+
+    import torch
+
+    bounds = run.space.bounds
+    model = fit_gp(X, Y, bounds)
+    names = list(run.space.names)
+    chosen = parameters or _most_relevant(model, names, 2)
+    figure = Figure(figsize=(5.5 * len(chosen), 4), layout="constrained")
+    axes_list = np.atleast_1d(figure.subplots(1, len(chosen), squeeze=False)[0])
+    for axes, name in zip(axes_list, chosen):
+        index = names.index(name)
+        grid = np.linspace(bounds[0, index], bounds[1, index], 200)
+        points = np.repeat(run.best.x[None], grid.size, axis=0)
+        points[:, index] = grid
+        with torch.no_grad():
+            posterior = model.posterior(torch.as_tensor(points, dtype=torch.float64))
+            mean = posterior.mean.numpy().ravel()
+            std = posterior.variance.clamp_min(0).sqrt().numpy().ravel()
+        axes.fill_between(grid, mean - 1.96 * std, mean + 1.96 * std, color="tab:blue", alpha=0.2, label="95 % band")
+        axes.plot(grid, mean, color="tab:blue", label="GP mean")
+        axes.scatter(X[:, index], Y, color="k", s=12, label="trials")
+        axes.axvline(run.best.x[index], color=BEST, lw=1, label="best")
+        axes.axhline(0.0, color="k", lw=0.8)
+        axes.set(xlabel=name, ylabel="robustness", title=f"GP slice through the best point: {name}")
+    axes_list[0].legend(loc="best", fontsize=8)
+    return figure
+
+
+def _most_relevant(model, names: list[str], count: int) -> list[str]:
+    kernel = getattr(model.covar_module, "base_kernel", model.covar_module)
+    lengthscales = kernel.lengthscale.detach().numpy().ravel() if getattr(kernel, "lengthscale", None) is not None else None
+    if lengthscales is None or lengthscales.size != len(names):
+        return names[:count]
+    return [names[index] for index in np.argsort(lengthscales)[:count]]
+
+
+def transition_graphs(run: RunData) -> Figure:
+    """The skill's states and transitions before and after optimisation: edge width by
+    probability, the state sequence followed by the retrieval highlighted."""
+    figure = Figure(figsize=(12, 3.6), layout="constrained")
+    before, after = figure.subplots(1, 2)
+    _transition_graph(before, run.model, run.task.duration, "unoptimised")
+    _transition_graph(after, run.best_model(), run.task.duration, f"best (trial {run.best.trial})" if run.best else "best")
+    return figure
+
+
+def _transition_graph(axes, model: HSMM, duration: float, title: str) -> None:
+    K = model.n_states
+    transmat = model.normalized_transmat()
+    followed = _followed_states(model, duration)
+    used = set(zip(followed[:-1], followed[1:]))
+    positions = {state: (state, 0.0) for state in range(K)}
+    for source in range(K):
+        for target in range(K):
+            probability = transmat[source, target]
+            if probability < 0.01:
+                continue
+            highlighted = (source, target) in used
+            bend = 0.35 if target > source else -0.35
+            axes.add_patch(
+                FancyArrowPatch(
+                    positions[source], positions[target], connectionstyle=f"arc3,rad={-bend}", arrowstyle="-|>", mutation_scale=12,
+                    lw=0.5 + 5 * probability, color=BEST if highlighted else "0.55", shrinkA=14, shrinkB=14, alpha=0.9,
+                )
+            )
+    for state, (x, y) in positions.items():
+        face = "mistyrose" if state in followed else "white"
+        axes.scatter([x], [y], s=700, color=face, edgecolor="k", zorder=3)
+        axes.text(x, y, str(state + 1), ha="center", va="center", zorder=4)
+        axes.text(x, -0.42, f"{model.duration_means_[state]:.1f} s", ha="center", fontsize=8)
+    axes.set(xlim=(-0.7, K - 0.3), ylim=(-0.6, 0.6), title=f"{title}: states followed {' → '.join(str(s + 1) for s in followed)}")
+    axes.axis("off")
+
+
+def _followed_states(model: HSMM, duration: float) -> list[int]:
+    states = retrieve(model, duration).states
+    changes = np.flatnonzero(np.diff(states)) + 1
+    return [int(states[0])] + [int(states[index]) for index in changes]
+
+
+def durations_per_trial(run: RunData) -> Figure:
+    """Duration means of each state per trial, stacked (the skill's timeline per trial)."""
+    figure = Figure(figsize=(9, 4), layout="constrained")
+    axes = figure.subplots()
+    labels = ["init"] + [str(trial.trial) for trial in run.trials]
+    models = [run.model] + [run.space.apply(run.model, trial.x) for trial in run.trials]
+    durations = np.array([model.duration_means_ for model in models])
+    bottom = np.zeros(len(models))
+    for state in range(durations.shape[1]):
+        axes.bar(labels, durations[:, state], bottom=bottom, color=f"C{state}", label=f"state {state + 1}", width=0.8)
+        bottom += durations[:, state]
+    if run.best is not None:
+        axes.get_xticklabels()[labels.index(str(run.best.trial))].set_color(BEST)
+    axes.set(xlabel="trial (best in red)", ylabel="duration mean (s)", title="duration means per state")
+    axes.tick_params(axis="x", labelsize=7)
+    axes.legend(loc="upper left", bbox_to_anchor=(1, 1), fontsize=8)
+    return figure
+
+
+def contact_forces(run: RunData) -> Figure | None:
+    """Contact force over time of every trial, when some trial recorded a non-zero force."""
+    tables = {number: table for number, table in run.signals.items() if "force" in table.columns}
+    if not tables or not any(np.any(table.columns["force"] > 0) for table in tables.values()):
+        return None
+    figure = Figure(figsize=(8, 4), layout="constrained")
+    axes = figure.subplots()
+    numbers = [number for number in tables if number > 0]
+    for color, number in zip(_trial_colors(len(numbers)), numbers):
+        axes.plot(tables[number].times, tables[number].columns["force"], color=color, lw=1)
+    if 0 in tables:
+        axes.plot(tables[0].times, tables[0].columns["force"], color=INITIAL, ls="--", label="unoptimised")
+    if run.best is not None and run.best.trial in tables:
+        axes.plot(tables[run.best.trial].times, tables[run.best.trial].columns["force"], color=BEST, lw=2, label="best")
+    axes.set(xlabel="t (s)", ylabel="contact force (N)", title="contact force per trial")
+    axes.legend(loc="best")
+    return figure

@@ -1,0 +1,111 @@
+"""Everything the figures of a run need, read once from its run directory."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from stl_lfd.hsmm import HSMM
+from stl_lfd.optim import ParameterSpace, RunDirectory, Task, Trial, build_space
+from stl_lfd.signals import SignalTable, read_signal_csv
+from stl_lfd.stl import ast, load_spec
+from stl_lfd.stl.regions import region_boxes
+
+
+@dataclass(frozen=True)
+class RegionConstraint:
+    """How the spec uses a region: `eventually`, `always` or `never` (always not), over an
+    interval in seconds (None: the whole trace)."""
+
+    region: str
+    kind: str
+    interval: tuple[float, float] | None
+
+
+@dataclass
+class RunData:
+    """A run directory, loaded.
+
+    Attributes:
+        trials: finished trials in order; signals: trial number -> recorded signals (0 is the
+        unoptimised skill); regions: name -> {signal: (lo, hi)}; constraints: the temporal
+        use of each region by the spec.
+    """
+
+    path: Path
+    task: Task
+    summary: dict
+    model: HSMM
+    space: ParameterSpace
+    trials: list[Trial]
+    signals: dict[int, SignalTable]
+    regions: dict[str, dict[str, tuple[float, float]]]
+    constraints: list[RegionConstraint]
+
+    @property
+    def best(self) -> Trial | None:
+        number = self.summary.get("best_trial")
+        return next((trial for trial in self.trials if trial.trial == number), None)
+
+    def best_model(self) -> HSMM:
+        best = self.best
+        return self.space.apply(self.model, best.x) if best is not None else self.model
+
+    def observations(self) -> tuple[np.ndarray, np.ndarray]:
+        """`n x d` points and `n` robustness values of the successful trials."""
+        succeeded = [trial for trial in self.trials if trial.robustness is not None]
+        return np.array([trial.x for trial in succeeded]).reshape(-1, self.space.dimension), np.array([trial.robustness for trial in succeeded])
+
+
+def load_run(path: Path) -> RunData:
+    run = RunDirectory.open(path)
+    task, model = run.task(), run.model()
+    trials = run.trials()
+    signals = {}
+    for number in [0] + [trial.trial for trial in trials]:
+        file = run.signals_path(number)
+        if file.exists():
+            signals[number] = read_signal_csv(file)
+    spec = load_spec(task.spec)
+    return RunData(
+        path=Path(path),
+        task=task,
+        summary=run.summary(),
+        model=model,
+        space=build_space(model, task.parameters, task.source),
+        trials=trials,
+        signals=signals,
+        regions=region_boxes(spec),
+        constraints=region_constraints(spec),
+    )
+
+
+def region_constraints(spec: ast.Spec) -> list[RegionConstraint]:
+    """`F [a,b] R`, `G [a,b] R` and `G [a,b] !R` where R names a region, in the spec's formula."""
+    regions = region_boxes(spec)
+    found: list[RegionConstraint] = []
+
+    def visit(node: ast.Node) -> None:
+        if isinstance(node, (ast.Eventually, ast.Always)):
+            child, negated = node.child, False
+            if isinstance(child, ast.Not):
+                child, negated = child.child, True
+            if isinstance(child, ast.Ref) and child.name in regions:
+                interval = (node.interval.lo, node.interval.hi) if node.interval is not None else None
+                kind = "eventually" if isinstance(node, ast.Eventually) else ("never" if negated else "always")
+                if not (kind == "eventually" and negated):
+                    found.append(RegionConstraint(child.name, kind, interval))
+                    return
+        for child in node.children():
+            visit(child)
+
+    visit(spec.formula)
+    return found
+
+
+def signed_distance(table: SignalTable, box: dict[str, tuple[float, float]]) -> np.ndarray:
+    """`T` signed distance to the box (negative inside): minus the box's classic robustness."""
+    margins = [(hi - lo) / 2 - np.abs(table.columns[name] - (hi + lo) / 2) for name, (lo, hi) in box.items() if name in table.columns]
+    return -np.min(margins, axis=0)

@@ -1,0 +1,75 @@
+"""`stlopt report` on a small kinematic run: every figure written, valid, not blank, linked."""
+
+import numpy as np
+import pytest
+from PIL import Image
+from typer.testing import CliRunner
+
+from stl_lfd.cli import app
+from stl_lfd.optim import load_task, optimise, start_run
+from stl_lfd.signals import read_signal_csv, write_signal_csv
+from tests.conftest import ROOT
+
+runner = CliRunner()
+FIGURES = ["trajectories", "region_distances", "robustness", "gp_slices", "transitions", "durations"]
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory, learned_model_file):
+    folder = tmp_path_factory.mktemp("report")
+    task = folder / "task.yaml"
+    task.write_text(
+        f"name: small\nspec: {ROOT / 'specs' / 'phi2.stl'}\nmodel: {learned_model_file}\nbackend: kinematic\nduration: 22\nrate: 20\n"
+        "parameters:\n  means: {components: [3]}\n  durations: {components: all}\n  transitions: band\n"
+        "optimizer: {initial: 3, trials: 6, seed: 0}\n"
+    )
+    optimise(start_run(load_task(task), folder / "run"))
+    return folder / "run"
+
+
+def assert_picture(path):
+    with Image.open(path) as image:
+        assert image.format == "PNG"
+        pixels = np.asarray(image.convert("L"), dtype=float)
+    assert pixels.shape[0] > 200 and pixels.shape[1] > 300
+    assert pixels.std() > 5  # not a blank canvas
+
+
+def test_report_writes_every_figure_and_an_index(run_dir, tmp_path):
+    out = tmp_path / "report"
+    result = runner.invoke(app, ["report", str(run_dir), "--out", str(out)])
+    assert result.exit_code == 0, result.stderr
+    listed = result.stdout.split()
+    assert listed[-1] == str(out / "index.html")
+    for name in FIGURES:
+        assert str(out / f"{name}.png") in listed
+        assert_picture(out / f"{name}.png")
+    page = (out / "index.html").read_text()
+    for name in FIGURES:
+        assert f'src="{name}.png"' in page
+    assert "best robustness" in page and "phi2.stl" in page
+    assert not (out / "forces.png").exists()  # the kinematic backend touches nothing
+
+
+def test_forces_and_comparison_when_the_data_is_there(run_dir, tmp_path):
+    touched = tmp_path / "touched"
+    import shutil
+
+    shutil.copytree(run_dir, touched)
+    signals = touched / "signals" / "trial-0002.csv"
+    table = read_signal_csv(signals)
+    table.columns["force"] = np.linspace(0.0, 3.0, table.samples)
+    write_signal_csv(table, signals)
+    out = tmp_path / "report"
+    result = runner.invoke(app, ["report", str(touched), "--out", str(out), "--compare", str(run_dir), "--gp-parameter", "duration[4]"])
+    assert result.exit_code == 0, result.stderr
+    assert_picture(out / "forces.png")
+    assert_picture(out / "compare.png")
+    assert 'src="forces.png"' in (out / "index.html").read_text()
+
+
+def test_report_errors_are_one_line(run_dir, tmp_path):
+    missing = runner.invoke(app, ["report", str(tmp_path / "nothing")])
+    assert missing.exit_code == 5 and "not a run directory" in missing.stderr
+    bad = runner.invoke(app, ["report", str(run_dir), "--out", str(tmp_path / "r"), "--gp-parameter", "mean[9].q"])
+    assert bad.exit_code == 5 and "is not a parameter of the run" in bad.stderr
