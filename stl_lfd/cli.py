@@ -299,7 +299,11 @@ def optimize(
             overrides = dict(spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None)
             prepared = start_run(task.with_overrides(**overrides), run_dir, lambda message: print(message, file=sys.stderr))
         printer = TrialPrinter(prepared)
-        summary = optimise(prepared, printer.trial)
+        try:
+            summary = optimise(prepared, printer.trial)
+        except KeyboardInterrupt:
+            print(f"interrupted; the finished trials are kept. Continue with: stlopt optimize {task_file} --out {run_dir} --resume", file=sys.stderr)
+            raise typer.Exit(code=130) from None
         printer.done(summary)
     print(json.dumps(summary, indent=2))
 

@@ -14,7 +14,7 @@ class TrialPrinter:
     """Prints a line per finished trial: number, phase, robustness, best so far, satisfied, time."""
 
     def __init__(self, prepared: PreparedRun, console: Console | None = None) -> None:
-        self.console = console or Console(stderr=True, highlight=False)
+        self.console = console or Console(stderr=True, highlight=False, soft_wrap=True)
         task, summary = prepared.task, prepared.summary
         optimizer = task.optimizer
         done = len(prepared.history)
@@ -32,8 +32,8 @@ class TrialPrinter:
     def trial(self, trial: Trial, best: Trial | None) -> None:
         value = f"{trial.robustness:+.5f}" if trial.robustness is not None else "failed"
         best_value = f"{best.robustness:+.5f}" if best is not None else "-"
-        mark = "[green]yes[/]" if trial.satisfied else "no"
-        line = f"{trial.trial:>3}/{self.budget:<3} {trial.phase:>6} {value:>11} {best_value:>11} {mark:>9} {trial.wall_seconds:6.2f}s"
+        mark = f"{'[green]yes[/]' if trial.satisfied else 'no':>{9 + (len('[green][/]') if trial.satisfied else 0)}}"
+        line = f"{trial.trial:>3}/{self.budget:<3} {trial.phase:>6} {value:>11} {best_value:>11} {mark} {trial.wall_seconds:6.2f}s"
         if trial.error:
             line += f"  [red]{trial.error}[/]"
         self.console.print(line)

@@ -88,6 +88,8 @@ class PandaWorld:
         self.floor = client.loadURDF("plane.urdf")
         self.robot = client.loadURDF("franka_panda/panda.urdf", useFixedBase=True)
         self.objects = {item.name: self._add_object(item) for item in scene.objects}
+        self.movable = [self.objects[item.name] for item in scene.objects if item.mass > 0]
+        self.held: tuple[int, int] | None = None  # (object body, constraint)
         for region in scene.regions:
             self._add_region(region)
         for joint, angle in zip(ARM_JOINTS + FINGER_JOINTS, REST_POSE):
@@ -124,6 +126,7 @@ class PandaWorld:
     def reset(self, position: np.ndarray, opening: float) -> None:
         """Restore the initial state, then place the hand at `position` at rest."""
         client = self.client
+        self.release()
         client.restoreState(self.initial_state)
         for _ in range(20):
             angles = self._inverse_kinematics(position, iterations=100)
@@ -152,6 +155,47 @@ class PandaWorld:
     def step(self) -> None:
         self.client.stepSimulation()
 
+    def grasp(self, time: float) -> None:
+        """Attach the movable object nearest the grasp-target link with a fixed constraint at
+        their current relative pose; an ExecutionError when none is within reach."""
+        hand = self.end_effector()
+        candidates = []
+        for body in self.movable:
+            position = np.array(self.client.getBasePositionAndOrientation(body)[0])
+            _, distance = self._closest_point(body)
+            candidates.append((distance, body, position))
+        reachable = [item for item in candidates if item[0] <= self.scene.grasp_distance]
+        if not reachable:
+            nearest = min((item[0] for item in candidates), default=float("inf"))
+            raise ExecutionError(
+                f"grasp at t = {time:.2f} s: nothing within {1000 * self.scene.grasp_distance:.0f} mm of the hand "
+                f"at x={hand[0]:.3f} y={hand[1]:.3f} z={hand[2]:.3f} (nearest object {1000 * nearest:.0f} mm away)"
+            )
+        _, body, _ = min(reachable, key=lambda item: item[0])
+        link_state = self.client.getLinkState(self.robot, END_EFFECTOR_LINK, computeForwardKinematics=1)
+        link_position, link_orientation = link_state[4], link_state[5]
+        body_position, body_orientation = self.client.getBasePositionAndOrientation(body)
+        inverse_position, inverse_orientation = self.client.invertTransform(link_position, link_orientation)
+        relative_position, relative_orientation = self.client.multiplyTransforms(inverse_position, inverse_orientation, body_position, body_orientation)
+        constraint = self.client.createConstraint(
+            self.robot, END_EFFECTOR_LINK, body, -1, self.pb.JOINT_FIXED, [0, 0, 0], relative_position, [0, 0, 0], relative_orientation
+        )
+        self.held = (body, constraint)
+
+    def _closest_point(self, body: int) -> tuple[int, float]:
+        """Distance (m) from the grasp-target point to the surface of `body` (0 when inside)."""
+        hand = self.end_effector()
+        position, orientation = self.client.getBasePositionAndOrientation(body)
+        inverse = self.client.invertTransform(position, orientation)
+        local = np.array(self.client.multiplyTransforms(inverse[0], inverse[1], list(hand), [0, 0, 0, 1])[0])
+        return body, _distance_to_shape(self.client.getCollisionShapeData(body, -1)[0], local)
+
+    def release(self) -> None:
+        """Let go of the held object, if any."""
+        if self.held is not None:
+            self.client.removeConstraint(self.held[1])
+            self.held = None
+
     def _inverse_kinematics(self, position: np.ndarray, iterations: int = 20) -> list[float]:
         angles = self.client.calculateInverseKinematics(
             self.robot, END_EFFECTOR_LINK, list(position), GRIPPER_DOWN, maxNumIterations=iterations, residualThreshold=1e-5
@@ -166,11 +210,14 @@ class PandaWorld:
         return sum(self.client.getJointState(self.robot, joint)[0] for joint in FINGER_JOINTS)
 
     def contact_force(self) -> float:
-        """Norm of the summed contact normal forces between the robot and the rest of the world."""
+        """Norm of the summed contact normal forces between the robot (with the object it holds)
+        and the rest of the world."""
+        tool = {self.robot} | ({self.held[0]} if self.held else set())
         total = np.zeros(3)
-        for contact in self.client.getContactPoints(bodyA=self.robot):
-            if contact[2] != self.robot:
-                total += contact[9] * np.asarray(contact[7])
+        for body in tool:
+            for contact in self.client.getContactPoints(bodyA=body):
+                if contact[2] not in tool:
+                    total += contact[9] * np.asarray(contact[7])
         return float(np.linalg.norm(total))
 
     def render(self, camera: Camera) -> np.ndarray:
@@ -218,10 +265,14 @@ class PyBulletBackend:
         fingers = np.empty(steps + 1)
         forces = np.empty(steps + 1)
         world.reset(targets[0], openings[0])
+        events = list(reference.events)
         positions[0], fingers[0], forces[0] = world.end_effector(), world.gripper_opening(), world.contact_force()
         if observer is not None:
             observer(0.0, world)
         for step in range(1, steps + 1):
+            while events and events[0][0] <= step_times[step] + 1e-9:
+                time, action = events.pop(0)
+                world.grasp(time) if action == "grasp" else world.release()
             world.command(targets[step], openings[step])
             world.step()
             positions[step], fingers[step], forces[step] = world.end_effector(), world.gripper_opening(), world.contact_force()
@@ -235,6 +286,21 @@ class PyBulletBackend:
         for world in self._worlds.values():
             world.close()
         self._worlds.clear()
+
+
+def _distance_to_shape(shape: tuple, point: np.ndarray) -> float:
+    """Distance from `point` (in the body frame) to a box, cylinder (z axis) or sphere."""
+    geometry, dimensions = shape[2], shape[3]
+    if geometry == 3:  # GEOM_BOX: dimensions are full extents
+        outside = np.maximum(np.abs(point) - np.asarray(dimensions) / 2, 0.0)
+        return float(np.linalg.norm(outside))
+    if geometry == 4:  # GEOM_CYLINDER: (height, radius, ...)
+        height, radius = dimensions[0], dimensions[1]
+        radial = max(np.hypot(point[0], point[1]) - radius, 0.0)
+        axial = max(abs(point[2]) - height / 2, 0.0)
+        return float(np.hypot(radial, axial))
+    radius = dimensions[0]  # GEOM_SPHERE
+    return float(max(np.linalg.norm(point) - radius, 0.0))
 
 
 def low_pass(values: np.ndarray, cutoff_hz: float, period: float) -> np.ndarray:

@@ -11,6 +11,9 @@ from stl_lfd.errors import ExecutionError
 from stl_lfd.signals import SignalTable
 
 
+ACTIONS = ("grasp", "release")
+
+
 class TrackingWarning(UserWarning):
     """The robot did not follow the reference (typically: a target outside the workspace)."""
 
@@ -23,11 +26,14 @@ class Reference:
         times: `T` strictly increasing seconds, starting at 0.
         positions: `T x 3` grasp-target positions (m) in the robot base frame.
         gripper: `T` finger openings (m), or None to keep the scene's opening.
+        events: `(time, action)` pairs, action `grasp` (take the movable object nearest the
+            hand) or `release` (let it go).
     """
 
     times: np.ndarray
     positions: np.ndarray
     gripper: np.ndarray | None = None
+    events: tuple[tuple[float, str], ...] = ()
 
     def __post_init__(self) -> None:
         self.times = np.asarray(self.times, dtype=float)
@@ -46,6 +52,12 @@ class Reference:
             _require_finite("gripper", self.gripper[:, None], self.times)
         if np.any(np.diff(self.times) <= 0):
             raise ExecutionError("reference: times must be strictly increasing")
+        for time, action in self.events:
+            if action not in ACTIONS:
+                raise ExecutionError(f"reference: unknown action '{action}' (known: {', '.join(ACTIONS)})")
+            if not self.times[0] <= time <= self.times[-1]:
+                raise ExecutionError(f"reference: {action} at t = {time:g} s is outside the reference")
+        self.events = tuple(sorted(self.events))
 
     @property
     def duration(self) -> float:

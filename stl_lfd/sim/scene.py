@@ -82,6 +82,8 @@ class Scene:
         force_filter_hz: cut-off of the first-order low-pass that models the force sensor.
         tracking_tolerance: worst end-effector error (m) beyond which a rollout warns that the
             reference was not followed (typically a target outside the workspace).
+        grasp_distance: how far (m) from the grasp-target link a movable object may be for a
+            `grasp` event to take it.
         camera: the viewpoint of videos and of the GUI.
         objects: rigid bodies besides the robot and the floor.
         regions: boxes drawn for viewing.
@@ -93,6 +95,7 @@ class Scene:
     control: Control = field(default_factory=Control)
     force_filter_hz: float = 10.0
     tracking_tolerance: float = 0.01
+    grasp_distance: float = 0.03
     camera: Camera = field(default_factory=Camera)
     objects: tuple[SceneObject, ...] = ()
     regions: tuple[Region, ...] = ()
@@ -131,15 +134,16 @@ def load_scene(name_or_path: str | Path) -> Scene:
 
 def parse_scene(data: dict[str, Any], path: Path) -> Scene:
     """Validate the mapping read from a scene file."""
-    keys = ("description", "gripper_opening", "control", "force_filter_hz", "tracking_tolerance", "camera", "objects")
+    keys = ("description", "gripper_opening", "control", "force_filter_hz", "tracking_tolerance", "grasp_distance", "camera", "objects")
     check_keys(data, keys, path, required=("description",))
     scene = Scene(name=path.stem, description=str(data["description"]))
     if "gripper_opening" in data:
         scene = replace(scene, gripper_opening=number(data["gripper_opening"], path, "gripper_opening", minimum=0.0))
     if "force_filter_hz" in data:
         scene = replace(scene, force_filter_hz=number(data["force_filter_hz"], path, "force_filter_hz", positive=True))
-    if "tracking_tolerance" in data:
-        scene = replace(scene, tracking_tolerance=number(data["tracking_tolerance"], path, "tracking_tolerance", positive=True))
+    for key in ("tracking_tolerance", "grasp_distance"):
+        if key in data:
+            scene = replace(scene, **{key: number(data[key], path, key, positive=True)})
     if "control" in data:
         scene = replace(scene, control=_parse_control(data["control"], path))
     if "camera" in data:

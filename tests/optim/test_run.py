@@ -120,3 +120,28 @@ def test_the_paper_budget_satisfies_phi1_on_the_kinematic_backend(tmp_path):
     space = build_space(run.model(), task.parameters)
     for trial in run.trials():
         assert np.all((trial.x >= space.lower) & (trial.x <= space.upper)), trial.trial
+
+
+def test_ctrl_c_keeps_the_finished_trials_and_says_how_to_resume(tmp_path, learned_model_file, monkeypatch):
+    from stl_lfd.optim import run as run_module
+
+    task = small_task(tmp_path, learned_model_file)
+    out = tmp_path / "interrupted"
+    original = run_module.SkillObjective.__call__
+    calls = []
+
+    def interrupt_on_third(self, x):
+        calls.append(x)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return original(self, x)
+
+    monkeypatch.setattr(run_module.SkillObjective, "__call__", interrupt_on_third)
+    result = runner.invoke(app, ["optimize", str(task), "--out", str(out)])
+    assert result.exit_code == 130
+    assert "--resume" in result.stderr and "Traceback" not in result.stderr
+    assert len((out / "trials.jsonl").read_text().splitlines()) == 2
+    monkeypatch.setattr(run_module.SkillObjective, "__call__", original)
+    resumed = runner.invoke(app, ["optimize", str(task), "--out", str(out), "--resume"])
+    assert resumed.exit_code == 0, resumed.stderr
+    assert json.loads(resumed.stdout)["trials"] == 5
