@@ -12,9 +12,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from stl_lfd.behaviour import load_behaviour, reference_for
 from stl_lfd.errors import ConfigError, ExecutionError
 from stl_lfd.evaluate import evaluate_table
-from stl_lfd.execution import reference_of, scene_with_spec_regions
+from stl_lfd.execution import scene_with_spec_regions
 from stl_lfd.hsmm import HSMM, load_model
 from stl_lfd.sim import DEFAULT_RATE, execute
 
@@ -35,9 +36,11 @@ class ReplayRequest:
 
 @dataclass(frozen=True)
 class Skill:
-    """A model to execute with the settings it is judged under."""
+    """Models to execute (one skill, or the skills of a behaviour) with the settings they are
+    judged under."""
 
-    model: HSMM
+    models: dict[str, HSMM]
+    behaviour: Path | None
     spec: Path | None
     scene: str
     duration: float | None
@@ -59,7 +62,8 @@ def replay_skill(request: ReplayRequest, gui: bool, video: Path | None, progress
     """Execute the requested skill in the GUI (real time) or headless into a video."""
     skill = resolve_skill(request)
     scene = scene_with_spec_regions(skill.scene, skill.spec)
-    reference = reference_of(skill.model, skill.duration)
+    behaviour = load_behaviour(skill.behaviour) if skill.behaviour is not None else None
+    reference = reference_for(skill.models, behaviour, scene.gripper_opening, skill.duration)
     if gui:
         from stl_lfd.sim.panda import PyBulletBackend, pace_real_time
 
@@ -104,7 +108,8 @@ def resolve_skill(request: ReplayRequest) -> Skill:
 
         run = trial_skill(source, request.trial)
         return Skill(
-            model=run.model,
+            models=run.models,
+            behaviour=run.behaviour,
             spec=request.spec or run.spec,
             scene=request.scene or run.scene,
             duration=request.duration or run.duration,
@@ -117,7 +122,8 @@ def resolve_skill(request: ReplayRequest) -> Skill:
     if request.trial != "best":
         raise ExecutionError("--trial applies to run directories, not to a model file")
     return Skill(
-        model=load_model(source),
+        models={"skill": load_model(source)},
+        behaviour=None,
         spec=request.spec,
         scene=request.scene or "free_space",
         duration=request.duration,

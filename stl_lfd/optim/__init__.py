@@ -11,15 +11,18 @@
 from stl_lfd.optim.loop import Trial, best_trial
 from stl_lfd.optim.run import optimise, resume_run, start_run
 from stl_lfd.optim.rundir import RunDirectory, trial_skill
-from stl_lfd.optim.space import ParameterSpace, build_space
-from stl_lfd.optim.task import Task, load_task
+from stl_lfd.optim.space import ParameterSpace, SearchSpace, build_search_space, build_space
+from stl_lfd.optim.task import SINGLE_SKILL, Task, load_task
 
 __all__ = [
+    "SINGLE_SKILL",
     "ParameterSpace",
+    "SearchSpace",
     "RunDirectory",
     "Task",
     "Trial",
     "best_trial",
+    "build_search_space",
     "build_space",
     "load_task",
     "optimise",

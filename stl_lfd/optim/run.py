@@ -10,29 +10,30 @@ from typing import Any, Callable
 
 import numpy as np
 
+from stl_lfd.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
 from stl_lfd.errors import ConfigError, SpecError
-from stl_lfd.execution import rollout_model
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
 from stl_lfd.optim.loop import Outcome, Trial, best_trial, run_trials
 from stl_lfd.optim.rundir import RunDirectory
-from stl_lfd.optim.space import ParameterSpace, build_space
-from stl_lfd.optim.task import Task
-from stl_lfd.sim import Scene, load_scene
+from stl_lfd.optim.space import SearchSpace, build_search_space
+from stl_lfd.optim.task import SINGLE_SKILL, Task
+from stl_lfd.sim import Scene, execute, load_scene
 from stl_lfd.stl import Robustness, compile_spec, load_spec
 
 
 class SkillObjective:
-    """x -> adapted model -> rollout -> robustness of the recorded signals (payload: signals)."""
+    """x -> adapted models -> (behaviour) reference -> rollout -> robustness of the recorded
+    signals (payload: the signals)."""
 
-    def __init__(self, model: HSMM, space: ParameterSpace, task: Task, scene: Scene, robustness: Robustness) -> None:
-        self.model, self.space, self.task, self.scene, self.robustness = model, space, task, scene, robustness
+    def __init__(self, models: dict[str, HSMM], space: SearchSpace, task: Task, behaviour: Behaviour | None, scene: Scene, robustness: Robustness) -> None:
+        self.models, self.space, self.task, self.behaviour, self.scene, self.robustness = models, space, task, behaviour, scene, robustness
 
     def __call__(self, x: np.ndarray) -> Outcome:
-        return self.evaluate(self.space.apply(self.model, x))
+        return self.evaluate(self.space.apply(self.models, x))
 
-    def evaluate(self, model: HSMM) -> Outcome:
-        rollout = rollout_model(model, self.scene, self.task.backend, self.task.duration, self.task.rate)
-        signals = rollout.signals
+    def evaluate(self, models: dict[str, HSMM]) -> Outcome:
+        reference = reference_for(models, self.behaviour, self.scene.gripper_opening, self.task.duration)
+        signals = execute(reference, self.scene, self.task.backend, self.task.rate).signals
         return Outcome(self.robustness(signals.columns, signals.times), signals)
 
 
@@ -40,17 +41,26 @@ class SkillObjective:
 class PreparedRun:
     task: Task
     run: RunDirectory
-    model: HSMM
-    space: ParameterSpace
+    models: dict[str, HSMM]
+    space: SearchSpace
     objective: SkillObjective
     history: list[Trial]
     summary: dict[str, Any]
 
 
-def objective_for(task: Task, model: HSMM) -> tuple[ParameterSpace, SkillObjective]:
+def task_models(task: Task) -> dict[str, HSMM]:
+    """The skills of a task: learned from its demos, loaded, or those of its behaviour."""
+    if task.behaviour is not None:
+        return behaviour_models(load_behaviour(task.behaviour))
+    if task.demos is not None:
+        return {SINGLE_SKILL: learn_from_folder(task.demos, task.states)[0]}
+    return {SINGLE_SKILL: load_model(task.model)}
+
+
+def objective_for(task: Task, models: dict[str, HSMM]) -> tuple[SearchSpace, SkillObjective]:
     """The parameter space and the objective of `task`; spec problems are found here, before
     any trial: unknown signals, and windows that reach past the rollout duration."""
-    space = build_space(model, task.parameters, task.source)
+    space = build_search_space(models, task.parameters, task.source)
     robustness = compile_spec(load_spec(task.spec), task.semantics, task.nu, source=str(task.spec))
     if robustness.horizon > task.duration + 1e-9:
         raise ConfigError(
@@ -61,23 +71,21 @@ def objective_for(task: Task, model: HSMM) -> tuple[ParameterSpace, SkillObjecti
     unknown = sorted(set(robustness.signals) - recorded)
     if unknown:
         raise SpecError(f"{task.spec}: signal {', '.join(unknown)} is not recorded by rollouts (they record {', '.join(sorted(recorded))})")
-    return space, SkillObjective(model, space, task, load_scene(task.scene), robustness)
+    behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None
+    return space, SkillObjective(models, space, task, behaviour, load_scene(task.scene), robustness)
 
 
 def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lambda message: None) -> PreparedRun:
     """Learn or load the model, check the spec, execute the unoptimised skill, then create the
     run directory with all of that in it."""
-    if task.demos is not None:
-        learn_progress(f"learning K = {task.states} from {task.demos}")
-        model, _ = learn_from_folder(task.demos, task.states)
-    else:
-        model = load_model(task.model)
-    space, objective = objective_for(task, model)
+    learn_progress(f"learning the skills of {task.source.name}" if task.model is None else f"loading {task.model}")
+    models = task_models(task)
+    space, objective = objective_for(task, models)
     start = time.perf_counter()
-    initial = objective.evaluate(model)
+    initial = objective.evaluate(models)
     summary = _summary(task, space, float(initial.robustness), [], time.perf_counter() - start)
-    run = RunDirectory.create(out, task, model, initial.payload, summary)
-    return PreparedRun(task, run, model, space, objective, [], summary)
+    run = RunDirectory.create(out, task, models, initial.payload, summary)
+    return PreparedRun(task, run, models, space, objective, [], summary)
 
 
 def resume_run(out: Path, trials: int | None = None) -> PreparedRun:
@@ -86,13 +94,13 @@ def resume_run(out: Path, trials: int | None = None) -> PreparedRun:
     task = run.task()
     if trials is not None:
         task = task.with_overrides(trials=trials)
-    model = run.model()
-    space, objective = objective_for(task, model)
+    models = run.models()
+    space, objective = objective_for(task, models)
     history = run.trials()
     if any(len(trial.x) != space.dimension for trial in history):
         raise ConfigError(f"{out}: the recorded trials do not match the task's {space.dimension} parameters")
     summary = run.summary()
-    return PreparedRun(task, run, model, space, objective, history, summary)
+    return PreparedRun(task, run, models, space, objective, history, summary)
 
 
 def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None) -> dict[str, Any]:
@@ -110,21 +118,21 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
         improved = trial.robustness is not None and (best is None or trial.robustness > best.robustness)
         if improved:
             best = trial
-            run.write_best_model(space.apply(prepared.model, trial.x))
+            run.write_best_models(space.apply(prepared.models, trial.x))
         history.append(trial)
         run.write_summary(_summary(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start))
         on_trial(trial, best)
 
     history = list(prepared.history)
-    if best is not None and not (run.path / "best_model.npz").exists():
-        run.write_best_model(space.apply(prepared.model, best.x))
+    if best is not None and not run.has_best_models():
+        run.write_best_models(space.apply(prepared.models, best.x))
     run_trials(prepared.objective, space.bounds, task.optimizer, prepared.history, record)
     summary = _summary(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start)
     run.write_summary(summary)
     return summary
 
 
-def _summary(task: Task, space: ParameterSpace, initial_robustness: float, history: list[Trial], wall_seconds: float) -> dict[str, Any]:
+def _summary(task: Task, space: SearchSpace, initial_robustness: float, history: list[Trial], wall_seconds: float) -> dict[str, Any]:
     best = best_trial(history)
     satisfied = [trial.trial for trial in history if trial.satisfied]
     return {

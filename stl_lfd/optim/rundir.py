@@ -3,11 +3,11 @@
 ```
 runs/<name>/
   task.yaml            the task as used (absolute paths, command-line overrides applied)
-  model.npz            the unoptimised skill model
+  model.npz            the unoptimised skill model (model-NAME.npz per skill of a behaviour)
   trials.jsonl         one JSON line per finished trial, appended and flushed to disk
   signals/initial.csv  the recorded signals of the unoptimised skill
   signals/trial-NNNN.csv  the recorded signals of each successful trial
-  best_model.npz       the model of the best trial so far
+  best_model.npz       the model of the best trial so far (best_model-NAME.npz per skill)
   summary.json         initial and best robustness, best trial, counts, wall time
 ```
 
@@ -33,8 +33,8 @@ import yaml
 from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM, load_model, save_model
 from stl_lfd.optim.loop import Trial
-from stl_lfd.optim.space import build_space
-from stl_lfd.optim.task import Task, load_task
+from stl_lfd.optim.space import build_search_space
+from stl_lfd.optim.task import SINGLE_SKILL, Task, load_task
 from stl_lfd.signals import SignalTable, write_atomically, write_signal_csv
 
 TASK_FILE = "task.yaml"
@@ -52,7 +52,7 @@ class RunDirectory:
         self.path = Path(path)
 
     @classmethod
-    def create(cls, path: Path, task: Task, model: HSMM, initial_signals: SignalTable, summary: dict[str, Any]) -> "RunDirectory":
+    def create(cls, path: Path, task: Task, models: dict[str, HSMM], initial_signals: SignalTable, summary: dict[str, Any]) -> "RunDirectory":
         """Write a new run directory in one step (built beside it, then renamed into place)."""
         path = Path(path)
         if path.exists() and (not path.is_dir() or any(path.iterdir())):
@@ -62,7 +62,8 @@ class RunDirectory:
         try:
             run = cls(staging)
             write_atomically(staging / TASK_FILE, yaml.safe_dump(task.to_yaml_dict(), sort_keys=False))
-            save_model(model, staging / MODEL_FILE)
+            for skill, model in models.items():
+                save_model(model, staging / _model_file(MODEL_FILE, skill))
             (staging / SIGNALS_DIR).mkdir()
             write_signal_csv(initial_signals, staging / SIGNALS_DIR / "initial.csv")
             (staging / TRIALS_FILE).touch()
@@ -79,16 +80,22 @@ class RunDirectory:
     def open(cls, path: Path) -> "RunDirectory":
         """An existing run directory; ConfigError when `path` is not one."""
         path = Path(path)
-        for name in (TASK_FILE, MODEL_FILE, TRIALS_FILE, SUMMARY_FILE):
+        for name in (TASK_FILE, TRIALS_FILE, SUMMARY_FILE):
             if not (path / name).is_file():
                 raise ConfigError(f"{path}: not a run directory of stlopt optimize (no {name})")
+        if not list(path.glob("model*.npz")):
+            raise ConfigError(f"{path}: not a run directory of stlopt optimize (no {MODEL_FILE})")
         return cls(path)
 
     def task(self) -> Task:
         return load_task(self.path / TASK_FILE)
 
-    def model(self) -> HSMM:
-        return load_model(self.path / MODEL_FILE)
+    def models(self) -> dict[str, HSMM]:
+        """The unoptimised skills by name (`skill` for a single-skill run)."""
+        return _load_models(self.path, MODEL_FILE)
+
+    def best_models(self) -> dict[str, HSMM]:
+        return _load_models(self.path, BEST_MODEL_FILE)
 
     def summary(self) -> dict[str, Any]:
         try:
@@ -128,11 +135,28 @@ class RunDirectory:
     def signals_path(self, trial: int) -> Path:
         return self.path / SIGNALS_DIR / (f"trial-{trial:04d}.csv" if trial > 0 else "initial.csv")
 
-    def write_best_model(self, model: HSMM) -> None:
-        save_model(model, self.path / BEST_MODEL_FILE)
+    def write_best_models(self, models: dict[str, HSMM]) -> None:
+        for skill, model in models.items():
+            save_model(model, self.path / _model_file(BEST_MODEL_FILE, skill))
+
+    def has_best_models(self) -> bool:
+        return bool(list(self.path.glob("best_model*.npz")))
 
     def write_summary(self, summary: dict[str, Any]) -> None:
         write_atomically(self.path / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
+
+
+def _model_file(base: str, skill: str) -> str:
+    """`model.npz` for the single skill, `model-NAME.npz` for a skill of a behaviour."""
+    return base if skill == SINGLE_SKILL else base.replace(".npz", f"-{skill}.npz")
+
+
+def _load_models(folder: Path, base: str) -> dict[str, HSMM]:
+    single = folder / base
+    if single.exists():
+        return {SINGLE_SKILL: load_model(single)}
+    prefix = base.replace(".npz", "-")
+    return {path.stem[len(prefix) :]: load_model(path) for path in sorted(folder.glob(f"{prefix}*.npz"))}
 
 
 def _trial_to_json(trial: Trial) -> dict[str, Any]:
@@ -167,10 +191,11 @@ def _trial_from_json(data: dict[str, Any]) -> Trial:
 
 @dataclass(frozen=True)
 class TrialSkill:
-    """The model of one trial of a run, with the run's settings (for `stlopt replay`)."""
+    """The models of one trial of a run, with the run's settings (for `stlopt replay`)."""
 
     trial: int
-    model: HSMM
+    models: dict[str, HSMM]
+    behaviour: Path | None
     spec: Path
     scene: str
     duration: float
@@ -181,7 +206,7 @@ class TrialSkill:
 def trial_skill(path: Path, which: str = "best") -> TrialSkill:
     """The model of trial `which` (`best`, `initial`/`0`, or a trial number) of a run."""
     run = RunDirectory.open(path)
-    task, model, trials = run.task(), run.model(), run.trials()
+    task, models, trials = run.task(), run.models(), run.trials()
     if which == "best":
         number = run.summary().get("best_trial") or 0
     elif which == "initial":
@@ -195,5 +220,5 @@ def trial_skill(path: Path, which: str = "best") -> TrialSkill:
         found = [trial for trial in trials if trial.trial == number]
         if not found:
             raise ConfigError(f"{path}: no trial {number} (the run has {len(trials)} finished trials)")
-        model = build_space(model, task.parameters, task.source).apply(model, found[0].x)
-    return TrialSkill(number, model, task.spec, task.scene, task.duration, task.semantics, task.nu)
+        models = build_search_space(models, task.parameters, task.source).apply(models, found[0].x)
+    return TrialSkill(number, models, task.behaviour, task.spec, task.scene, task.duration, task.semantics, task.nu)

@@ -18,7 +18,7 @@ import numpy as np
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM
-from stl_lfd.optim.task import Parameters
+from stl_lfd.optim.task import SINGLE_SKILL, Parameters
 
 
 @dataclass(frozen=True)
@@ -137,3 +137,57 @@ def _states(components: tuple[int, ...] | str, K: int, source: Path | str, key: 
             raise ConfigError(f"{source}: '{key}' names state {state}, but the model has {K} states (numbered 1-{K})")
     return [state - 1 for state in components]
 
+
+
+@dataclass(frozen=True)
+class SearchSpace:
+    """The optimised parameters of all skills of a task: the skills' spaces side by side.
+
+    A point is the concatenation of each skill's point, in the order of `parts`; names are
+    prefixed with the skill (`pick.duration[2]`) unless the task has a single skill.
+    """
+
+    parts: dict[str, ParameterSpace]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        if list(self.parts) == [SINGLE_SKILL]:
+            return self.parts[SINGLE_SKILL].names
+        return tuple(f"{skill}.{name}" for skill, part in self.parts.items() for name in part.names)
+
+    @property
+    def lower(self) -> np.ndarray:
+        return np.concatenate([part.lower for part in self.parts.values()])
+
+    @property
+    def upper(self) -> np.ndarray:
+        return np.concatenate([part.upper for part in self.parts.values()])
+
+    @property
+    def initial(self) -> np.ndarray:
+        return np.concatenate([part.initial for part in self.parts.values()])
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """`2 x d`: lower bounds, then upper bounds."""
+        return np.vstack([self.lower, self.upper])
+
+    @property
+    def dimension(self) -> int:
+        return sum(part.dimension for part in self.parts.values())
+
+    def apply(self, models: dict[str, HSMM], x: np.ndarray) -> dict[str, HSMM]:
+        """The skills' models with the parameters of point `x` (`d`); other skills unchanged."""
+        adapted, start = dict(models), 0
+        for skill, part in self.parts.items():
+            adapted[skill] = part.apply(models[skill], np.asarray(x)[start : start + part.dimension])
+            start += part.dimension
+        return adapted
+
+    def as_dict(self, x: np.ndarray) -> dict[str, float]:
+        return {name: float(value) for name, value in zip(self.names, x)}
+
+
+def build_search_space(models: dict[str, HSMM], parameters: dict[str, Parameters], source: Path | str = "task") -> SearchSpace:
+    """The space of a task: `parameters` (skill -> selection) applied to `models` (skill -> model)."""
+    return SearchSpace({skill: build_space(models[skill], selection, source) for skill, selection in parameters.items()})

@@ -15,6 +15,7 @@ from stl_lfd.errors import ConfigError
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml
 
 METHODS = ("pi", "logei", "random")
+SINGLE_SKILL = "skill"  # the name of the one skill of a task without a behaviour
 TRANSITIONS = ("none", "band", "full")
 SEMANTICS = ("new", "classic")
 COORDINATES = ("x", "y", "z")
@@ -57,12 +58,18 @@ class Optimizer:
 
 @dataclass(frozen=True)
 class Task:
-    """A validated task file; paths are absolute or relative to the working directory."""
+    """A validated task file; paths are absolute or relative to the working directory.
+
+    The skills come from `demos` (learned with `states` states), a `model` file, or a
+    `behaviour` file (several skills and gripper actions). `parameters` maps each skill name
+    (`skill` for a single skill) to what is optimised in it.
+    """
 
     name: str
     spec: Path
     model: Path | None
     demos: Path | None
+    behaviour: Path | None
     states: int
     scene: str
     backend: str
@@ -70,7 +77,7 @@ class Task:
     nu: float
     duration: float
     rate: float
-    parameters: Parameters
+    parameters: dict[str, Parameters]
     optimizer: Optimizer
     source: Path
 
@@ -84,25 +91,32 @@ class Task:
 
     def to_yaml_dict(self) -> dict[str, Any]:
         """The task as it is used, in the task-file format (paths made absolute)."""
-        means, durations = self.parameters.means, self.parameters.durations
         data: dict[str, Any] = {"name": self.name, "spec": str(self.spec.resolve())}
         if self.model is not None:
             data["model"] = str(self.model.resolve())
+        if self.behaviour is not None:
+            data["behaviour"] = str(self.behaviour.resolve())
         if self.demos is not None:
             data["demos"] = str(self.demos.resolve())
             data["states"] = self.states
         data.update(scene=self.scene, backend=self.backend, semantics=self.semantics, nu=self.nu, duration=self.duration, rate=self.rate)
-        data["parameters"] = {
-            "means": {"components": list(means.components), "coordinates": list(means.coordinates), "beta": means.beta},
-            "durations": {"components": durations.components if isinstance(durations.components, str) else list(durations.components), "width": durations.width},
-            "transitions": self.parameters.transitions,
-        }
+        blocks = {name: _parameters_to_yaml(parameters) for name, parameters in self.parameters.items()}
+        data["parameters"] = blocks[SINGLE_SKILL] if self.behaviour is None else blocks
         opt = self.optimizer
         data["optimizer"] = {"method": opt.method, "initial": opt.initial, "trials": opt.trials, "seed": opt.seed, "xi": opt.xi}
         return data
 
 
-TOP_KEYS = ("name", "spec", "model", "demos", "states", "scene", "backend", "semantics", "nu", "duration", "rate", "parameters", "optimizer")
+TOP_KEYS = ("name", "spec", "model", "demos", "behaviour", "states", "scene", "backend", "semantics", "nu", "duration", "rate", "parameters", "optimizer")
+
+
+def _parameters_to_yaml(parameters: Parameters) -> dict[str, Any]:
+    means, durations = parameters.means, parameters.durations
+    return {
+        "means": {"components": list(means.components), "coordinates": list(means.coordinates), "beta": means.beta},
+        "durations": {"components": durations.components if isinstance(durations.components, str) else list(durations.components), "width": durations.width},
+        "transitions": parameters.transitions,
+    }
 
 
 def load_task(path: str | Path) -> Task:
@@ -110,9 +124,10 @@ def load_task(path: str | Path) -> Task:
     path = Path(path)
     data = read_yaml(path)
     check_keys(data, TOP_KEYS, path, required=("spec", "duration"))
-    if ("model" in data) == ("demos" in data):
-        raise ConfigError(f"{path}: give exactly one of 'model' (a model file) or 'demos' (a folder to learn from)")
+    if sum(key in data for key in ("model", "demos", "behaviour")) != 1:
+        raise ConfigError(f"{path}: give exactly one of 'model' (a model file), 'demos' (a folder to learn from) or 'behaviour' (a behaviour file)")
     base = path.parent
+    behaviour = _existing(base, data["behaviour"], path, "behaviour") if "behaviour" in data else None
     semantics = _choice(data.get("semantics", "new"), SEMANTICS, path, "semantics")
     backend = _choice(data.get("backend", "pybullet"), ("pybullet", "kinematic"), path, "backend")
     task = Task(
@@ -120,14 +135,15 @@ def load_task(path: str | Path) -> Task:
         spec=_existing(base, data["spec"], path, "spec"),
         model=_existing(base, data["model"], path, "model") if "model" in data else None,
         demos=_existing(base, data["demos"], path, "demos") if "demos" in data else None,
+        behaviour=behaviour,
         states=integer(data.get("states", 6), path, "states", minimum=1),
-        scene=str(data.get("scene", "free_space")),
+        scene=str(data.get("scene", _behaviour_scene(behaviour) if behaviour else "free_space")),
         backend=backend,
         semantics=semantics,
         nu=number(data.get("nu", 1.0), path, "nu", positive=True),
         duration=number(data["duration"], path, "duration", positive=True),
         rate=number(data.get("rate", 100.0), path, "rate", positive=True),
-        parameters=_parameters(data.get("parameters", {}), path),
+        parameters=_skill_parameters(data.get("parameters", {}), path, behaviour),
         optimizer=_optimizer(data.get("optimizer", {}), path),
         source=path,
     )
@@ -144,30 +160,50 @@ def check_budget(optimizer: Optimizer, path: Path) -> None:
         )
 
 
-def _parameters(data: Any, path: Path) -> Parameters:
-    check_keys(data, ("means", "durations", "transitions"), path, "parameters")
+def _behaviour_scene(behaviour: Path) -> str:
+    from stl_lfd.behaviour import load_behaviour
+
+    return load_behaviour(behaviour).scene
+
+
+def _skill_parameters(data: Any, path: Path, behaviour: Path | None) -> dict[str, Parameters]:
+    """`parameters` of a single-skill task, or per skill of a behaviour."""
+    if behaviour is None:
+        return {SINGLE_SKILL: _parameters(data, path, "parameters")}
+    from stl_lfd.behaviour import load_behaviour
+
+    skills = [step.name for step in load_behaviour(behaviour).skills]
+    check_keys(data, skills, path, "parameters")
+    blocks = {name: _parameters(block, path, f"parameters.{name}") for name, block in data.items()}
+    if not blocks:
+        raise ConfigError(f"{path}: 'parameters' selects nothing to optimise (name skills of the behaviour: {', '.join(skills)})")
+    return blocks
+
+
+def _parameters(data: Any, path: Path, where: str) -> Parameters:
+    check_keys(data, ("means", "durations", "transitions"), path, where)
     means, durations = MeanParameters(), DurationParameters()
     if "means" in data:
-        item = check_keys(data["means"], ("components", "coordinates", "beta"), path, "parameters.means", required=("components",))
+        item = check_keys(data["means"], ("components", "coordinates", "beta"), path, f"{where}.means", required=("components",))
         coordinates = tuple(item.get("coordinates", COORDINATES))
         for coordinate in coordinates:
             if coordinate not in COORDINATES:
-                raise ConfigError(f"{path}: 'parameters.means.coordinates' may hold x, y, z (got {coordinate!r})")
+                raise ConfigError(f"{path}: '{where}.means.coordinates' may hold x, y, z (got {coordinate!r})")
         means = MeanParameters(
-            components=_components(item["components"], path, "parameters.means.components", allow_all=False),
+            components=_components(item["components"], path, f"{where}.means.components", allow_all=False),
             coordinates=coordinates,
-            beta=number(item.get("beta", 2.0), path, "parameters.means.beta", positive=True),
+            beta=number(item.get("beta", 2.0), path, f"{where}.means.beta", positive=True),
         )
     if "durations" in data:
-        item = check_keys(data["durations"], ("components", "width"), path, "parameters.durations", required=("components",))
+        item = check_keys(data["durations"], ("components", "width"), path, f"{where}.durations", required=("components",))
         durations = DurationParameters(
-            components=_components(item["components"], path, "parameters.durations.components", allow_all=True),
-            width=number(item.get("width", 1.0), path, "parameters.durations.width", positive=True),
+            components=_components(item["components"], path, f"{where}.durations.components", allow_all=True),
+            width=number(item.get("width", 1.0), path, f"{where}.durations.width", positive=True),
         )
-    transitions = _choice(data.get("transitions", "none"), TRANSITIONS, path, "parameters.transitions")
+    transitions = _choice(data.get("transitions", "none"), TRANSITIONS, path, f"{where}.transitions")
     parameters = Parameters(means, durations, transitions)
     if not means.components and not durations.components and transitions == "none":
-        raise ConfigError(f"{path}: 'parameters' selects nothing to optimise")
+        raise ConfigError(f"{path}: '{where}' selects nothing to optimise")
     return parameters
 
 

@@ -155,17 +155,21 @@ def _most_relevant(model, names: list[str], count: int) -> list[str]:
 def transition_graphs(run: RunData) -> Figure:
     """The skill's states and transitions before and after optimisation: edge width by
     probability, the state sequence followed by the retrieval highlighted."""
-    figure = Figure(figsize=(12, 3.6), layout="constrained")
-    before, after = figure.subplots(1, 2)
-    _transition_graph(before, run.model, run.task.duration, "unoptimised")
-    _transition_graph(after, run.best_model(), run.task.duration, f"best (trial {run.best.trial})" if run.best else "best")
+    skills = list(run.models)
+    figure = Figure(figsize=(12, 3.6 * len(skills)), layout="constrained")
+    rows = figure.subplots(len(skills), 2, squeeze=False)
+    best_models = run.best_models()
+    for (before, after), skill in zip(rows, skills):
+        prefix = "" if len(skills) == 1 else f"{skill}, "
+        _transition_graph(before, run.models[skill], f"{prefix}unoptimised")
+        _transition_graph(after, best_models[skill], f"{prefix}best (trial {run.best.trial})" if run.best else f"{prefix}best")
     return figure
 
 
-def _transition_graph(axes, model: HSMM, duration: float, title: str) -> None:
+def _transition_graph(axes, model: HSMM, title: str) -> None:
     K = model.n_states
     transmat = model.normalized_transmat()
-    followed = _followed_states(model, duration)
+    followed = followed_states(model)
     used = set(zip(followed[:-1], followed[1:]))
     positions = {state: (state, 0.0) for state in range(K)}
     for source in range(K):
@@ -190,18 +194,26 @@ def _transition_graph(axes, model: HSMM, duration: float, title: str) -> None:
     axes.axis("off")
 
 
-def _followed_states(model: HSMM, duration: float) -> list[int]:
-    states = retrieve(model, duration).states
+def followed_states(model: HSMM) -> list[int]:
+    """The states (0-based) the retrieval of `model` goes through, in order."""
+    states = retrieve(model, model.expected_duration() + 1.0).states
     changes = np.flatnonzero(np.diff(states)) + 1
     return [int(states[0])] + [int(states[index]) for index in changes]
 
 
 def durations_per_trial(run: RunData) -> Figure:
-    """Duration means of each state per trial, stacked (the skill's timeline per trial)."""
-    figure = Figure(figsize=(9, 4), layout="constrained")
-    axes = figure.subplots()
+    """Duration means of each state per trial, stacked (the skill's timeline per trial); one
+    panel per skill whose durations are optimised."""
+    skills = [skill for skill, part in run.space.parts.items() if part.duration_slots] or list(run.models)[:1]
+    figure = Figure(figsize=(9, 4 * len(skills)), layout="constrained")
+    for axes, skill in zip(np.atleast_1d(figure.subplots(len(skills), 1, squeeze=False)[:, 0]), skills):
+        _duration_bars(axes, run, skill)
+    return figure
+
+
+def _duration_bars(axes, run: RunData, skill: str) -> None:
     labels = ["init"] + [str(trial.trial) for trial in run.trials]
-    models = [run.model] + [run.space.apply(run.model, trial.x) for trial in run.trials]
+    models = [run.models[skill]] + [run.space.apply(run.models, trial.x)[skill] for trial in run.trials]
     durations = np.array([model.duration_means_ for model in models])
     bottom = np.zeros(len(models))
     for state in range(durations.shape[1]):
@@ -209,10 +221,10 @@ def durations_per_trial(run: RunData) -> Figure:
         bottom += durations[:, state]
     if run.best is not None:
         axes.get_xticklabels()[labels.index(str(run.best.trial))].set_color(BEST)
-    axes.set(xlabel="trial (best in red)", ylabel="duration mean (s)", title="duration means per state")
+    title = "duration means per state" + ("" if len(run.models) == 1 else f" ({skill})")
+    axes.set(xlabel="trial (best in red)", ylabel="duration mean (s)", title=title)
     axes.tick_params(axis="x", labelsize=7)
     axes.legend(loc="upper left", bbox_to_anchor=(1, 1), fontsize=8)
-    return figure
 
 
 def contact_forces(run: RunData) -> Figure | None:

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from stl_lfd.hsmm import HSMM
-from stl_lfd.optim import ParameterSpace, RunDirectory, Task, Trial, build_space
+from stl_lfd.optim import RunDirectory, SearchSpace, Task, Trial, build_search_space
 from stl_lfd.signals import SignalTable, read_signal_csv
 from stl_lfd.stl import ast, load_spec
 from stl_lfd.stl.regions import region_boxes
@@ -37,8 +37,8 @@ class RunData:
     path: Path
     task: Task
     summary: dict
-    model: HSMM
-    space: ParameterSpace
+    models: dict[str, HSMM]
+    space: SearchSpace
     trials: list[Trial]
     signals: dict[int, SignalTable]
     regions: dict[str, dict[str, tuple[float, float]]]
@@ -49,9 +49,9 @@ class RunData:
         number = self.summary.get("best_trial")
         return next((trial for trial in self.trials if trial.trial == number), None)
 
-    def best_model(self) -> HSMM:
+    def best_models(self) -> dict[str, HSMM]:
         best = self.best
-        return self.space.apply(self.model, best.x) if best is not None else self.model
+        return self.space.apply(self.models, best.x) if best is not None else self.models
 
     def observations(self) -> tuple[np.ndarray, np.ndarray]:
         """`n x d` points and `n` robustness values of the successful trials."""
@@ -61,7 +61,7 @@ class RunData:
 
 def load_run(path: Path) -> RunData:
     run = RunDirectory.open(path)
-    task, model = run.task(), run.model()
+    task, models = run.task(), run.models()
     trials = run.trials()
     signals = {}
     for number in [0] + [trial.trial for trial in trials]:
@@ -73,8 +73,8 @@ def load_run(path: Path) -> RunData:
         path=Path(path),
         task=task,
         summary=run.summary(),
-        model=model,
-        space=build_space(model, task.parameters, task.source),
+        models=models,
+        space=build_search_space(models, task.parameters, task.source),
         trials=trials,
         signals=signals,
         regions=region_boxes(spec),

@@ -33,7 +33,8 @@ ARM_JOINTS = list(range(7))
 FINGER_JOINTS = [9, 10]
 # Elbow up, hand above the table: the posture the inverse kinematics starts from.
 REST_POSE = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785, 0.04, 0.04]
-GRIPPER_DOWN = (1.0, 0.0, 0.0, 0.0)  # quaternion (x, y, z, w): rotation by pi about x
+GRIPPER_DOWN = (1.0, 0.0, 0.0, 0.0)
+GRASP_FORCE = 2000.0  # N: the grasp constraint is stiff enough not to slip under contact  # quaternion (x, y, z, w): rotation by pi about x
 
 Observer = Callable[[float, "PandaWorld"], None]
 
@@ -180,6 +181,7 @@ class PandaWorld:
         constraint = self.client.createConstraint(
             self.robot, END_EFFECTOR_LINK, body, -1, self.pb.JOINT_FIXED, [0, 0, 0], relative_position, [0, 0, 0], relative_orientation
         )
+        self.client.changeConstraint(constraint, maxForce=GRASP_FORCE)
         self.held = (body, constraint)
 
     def _closest_point(self, body: int) -> tuple[int, float]:

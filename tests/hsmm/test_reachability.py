@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from stl_lfd.hsmm import retrieve
-from stl_lfd.optim import build_space, load_task
+from stl_lfd.optim import build_search_space, load_task
 from stl_lfd.stl import compile_spec, load_spec
 from tests.conftest import ROOT
 
@@ -40,8 +40,8 @@ def test_the_learned_skill_violates_the_spec(learned_model, spec, semantics):
 @pytest.mark.parametrize("spec", ["phi1", "phi2"])
 @pytest.mark.parametrize("semantics", ["classic", "new"])
 def test_the_spec_is_satisfiable_within_the_bounds(learned_model, spec, semantics):
-    space = build_space(learned_model, load_task(ROOT / "configs" / f"{spec}.yaml").parameters)
+    space = build_search_space({"skill": learned_model}, load_task(ROOT / "configs" / f"{spec}.yaml").parameters)
     unit = np.array(POINTS[spec])
     assert unit.shape == (space.dimension,) and np.all((unit >= 0) & (unit <= 1))
-    adapted = space.apply(learned_model, space.lower + unit * (space.upper - space.lower))
+    adapted = space.apply({"skill": learned_model}, space.lower + unit * (space.upper - space.lower))["skill"]
     assert robustness(adapted, spec, semantics) > 0.01

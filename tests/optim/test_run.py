@@ -9,7 +9,7 @@ from typer.testing import CliRunner
 
 from stl_lfd.cli import app
 from stl_lfd.errors import ConfigError, SpecError
-from stl_lfd.optim import RunDirectory, build_space, load_task, optimise, resume_run, start_run
+from stl_lfd.optim import RunDirectory, build_search_space, load_task, optimise, resume_run, start_run
 from tests.conftest import ROOT
 
 runner = CliRunner()
@@ -117,7 +117,7 @@ def test_the_paper_budget_satisfies_phi1_on_the_kinematic_backend(tmp_path):
     assert summary["initial_robustness"] < 0
     assert summary["satisfied"] and summary["best_robustness"] > 0.005
     run = RunDirectory(tmp_path / "phi1")
-    space = build_space(run.model(), task.parameters)
+    space = build_search_space(run.models(), task.parameters)
     for trial in run.trials():
         assert np.all((trial.x >= space.lower) & (trial.x <= space.upper)), trial.trial
 

@@ -3,7 +3,7 @@ from pathlib import Path
 import pytest
 
 from stl_lfd.errors import ConfigError
-from stl_lfd.optim import build_space, load_task
+from stl_lfd.optim import build_search_space, load_task
 from tests.conftest import ROOT
 
 CONFIGS = ROOT / "configs"
@@ -15,7 +15,7 @@ def test_the_paper_tasks_select_the_paper_parameter_sets(name, dimension, learne
     assert task.spec == CONFIGS / ".." / "specs" / f"{name}.stl"
     assert task.optimizer.initial == 8 and task.optimizer.trials == 32 and task.optimizer.method == "pi"
     assert task.semantics == "new"
-    assert build_space(learned_model, task.parameters).dimension == dimension
+    assert build_search_space({"skill": learned_model}, task.parameters).dimension == dimension
 
 
 def write_task(tmp_path: Path, body: str) -> Path:
@@ -62,7 +62,7 @@ def test_missing_files_are_named_relative_to_the_task(tmp_path):
 def test_states_beyond_the_model_are_refused(tmp_path, learned_model):
     task = load_task(write_task(tmp_path, "parameters:\n  durations: {components: [7]}\n"))
     with pytest.raises(ConfigError, match="names state 7, but the model has 6 states"):
-        build_space(learned_model, task.parameters, task.source)
+        build_search_space({"skill": learned_model}, task.parameters, task.source)
 
 
 def test_command_line_overrides_are_checked_like_the_file(tmp_path):

@@ -1,0 +1,105 @@
+"""Regenerate demos/pick/ and demos/insert/: demonstrations of the pick-and-insert behaviour.
+
+pick: from the home pose, a slow, roundabout path (via two points above the table, as a
+person guiding the arm might take) to above the shaft, then down to the grasp pose, in about
+26 s; so the learned pick reaches the shaft after 20 s.
+insert: from the grasp pose, lift, carry to above the holder, descend and stop; the demonstrated
+stop is 8 mm off the hole's centre in x (the paper's shift between end effector and holder),
+so the learned insertion pushes the shaft onto the holder's edge.
+
+Both: minimum-jerk segments, varying timing and via points, 0.5 mm sensor noise, 100 Hz.
+Run from the repository root: python demos/make_pick_insert.py [--count 4] [--seed 11]
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from stl_lfd.signals import SignalTable, write_signal_csv
+
+ROOT = Path(__file__).resolve().parent.parent
+RATE_HZ = 100
+SENSOR_NOISE_M = 0.0005
+HOME = np.array([0.42, 0.0, 0.40])
+GRASP = np.array([0.45, -0.25, 0.11])  # the grasp-target link around the shaft (pick_insert scene)
+HOLE = np.array([0.55, 0.20, 0.115])  # shaft bottom 5 mm above the table inside the holder
+INSERTION_SHIFT = np.array([0.008, 0.0, 0.0])
+
+
+def minimum_jerk(times: np.ndarray, waypoints: list[tuple[float, np.ndarray]]) -> np.ndarray:
+    """Piecewise minimum-jerk path through `(time, position)` waypoints."""
+    positions = np.repeat(waypoints[0][1][None], times.size, axis=0)
+    for (t0, p0), (t1, p1) in zip(waypoints[:-1], waypoints[1:]):
+        inside = (times >= t0) & (times <= t1)
+        phase = (times[inside] - t0) / (t1 - t0)
+        blend = 10 * phase**3 - 15 * phase**4 + 6 * phase**5
+        positions[inside] = p0 + (p1 - p0) * blend[:, None]
+    positions[times > waypoints[-1][0]] = waypoints[-1][1]
+    return positions
+
+
+def demonstration(rng: np.random.Generator, phases: list[tuple[np.ndarray, float, float]], hold_end: float) -> SignalTable:
+    """Waypoints reached after each (target, mean seconds, spread) phase, then a final hold."""
+    waypoints, clock = [(0.0, phases[0][0])], 0.0
+    for target, seconds, spread in phases[1:]:
+        clock += max(0.3, seconds + rng.normal(0, spread))
+        waypoints.append((clock, target))
+    times = np.arange(int(round((clock + hold_end) * RATE_HZ)) + 1) / RATE_HZ
+    path = minimum_jerk(times, waypoints) + rng.normal(0, SENSOR_NOISE_M, size=(times.size, 3))
+    return SignalTable(times, {"x": path[:, 0], "y": path[:, 1], "z": path[:, 2]})
+
+
+def pick(rng: np.random.Generator) -> SignalTable:
+    def near(point, spread):
+        return np.asarray(point) + rng.normal(0, spread, size=3) * np.array([1, 1, 0.5])
+
+    above = GRASP + np.array([0.0, 0.0, 0.14])
+    phases = [
+        (HOME, 0.0, 0.0),
+        (HOME, 3.5, 0.5),  # wait at home
+        (near([0.30, 0.10, 0.50], 0.015), 5.0, 0.6),
+        (near([0.28, -0.20, 0.50], 0.015), 5.0, 0.6),
+        (near(above, 0.004), 5.0, 0.6),
+        (GRASP + rng.normal(0, 0.001, 3), 4.0, 0.5),
+    ]
+    return demonstration(rng, phases, hold_end=3.0)
+
+
+def insert(rng: np.random.Generator) -> SignalTable:
+    def near(point, spread):
+        return np.asarray(point) + rng.normal(0, spread, size=3) * np.array([1, 1, 0.3])
+
+    lifted = GRASP + np.array([0.0, 0.0, 0.14])
+    stop = HOLE + INSERTION_SHIFT
+    phases = [
+        (GRASP, 0.0, 0.0),
+        (GRASP, 1.5, 0.3),
+        (near(lifted, 0.003), 2.5, 0.3),
+        (near([0.52, -0.02, 0.27], 0.01), 3.0, 0.4),
+        (near(stop + np.array([0, 0, 0.135]), 0.004), 3.0, 0.4),
+        (near(stop, 0.004), 3.0, 0.4),
+    ]
+    return demonstration(rng, phases, hold_end=2.5)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--count", type=int, default=4)
+    parser.add_argument("--seed", type=int, default=11)
+    parser.add_argument("--out", type=Path, default=ROOT / "demos")
+    args = parser.parse_args()
+    rng = np.random.default_rng(args.seed)
+    for name, make in (("pick", pick), ("insert", insert)):
+        folder = args.out / name
+        folder.mkdir(parents=True, exist_ok=True)
+        for old in folder.glob("demo_*.csv"):
+            old.unlink()
+        for index in range(args.count):
+            write_signal_csv(make(rng), folder / f"demo_{index + 1:02d}.csv")
+
+
+if __name__ == "__main__":
+    main()

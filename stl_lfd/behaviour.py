@@ -1,0 +1,155 @@
+"""Behaviours: skills and gripper actions in sequence, executed as one rollout.
+
+A behaviour file (YAML, e.g. `configs/behaviours/pick_insert.yaml`) names a scene and a list
+of steps, each either a skill (`skill: NAME` with `demos: DIR` and `states: K`, or `model:
+FILE`) or an action (`action: grasp|release`, `seconds`). Executing it retrieves each skill
+for its expected duration plus `settle` seconds, holds the last position during actions,
+closes the fingers from a grasp until the next release, and joins everything into one
+reference, so the recorded signal is continuous.
+
+Grasping attaches the nearest movable object to the hand with a fixed constraint (see
+`stl_lfd.sim.panda.PandaWorld.grasp`); a grasp with nothing in reach fails the rollout.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from stl_lfd.errors import ConfigError
+from stl_lfd.execution import reference_of
+from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
+from stl_lfd.sim import Reference
+from stl_lfd.sim.panda import TIME_STEP
+from stl_lfd.yamlfile import check_keys, integer, number, read_yaml
+
+ACTIONS = ("grasp", "release")
+DEFAULT_SETTLE = 1.0
+
+
+@dataclass(frozen=True)
+class SkillStep:
+    name: str
+    demos: Path | None
+    model: Path | None
+    states: int
+    settle: float
+
+
+@dataclass(frozen=True)
+class ActionStep:
+    action: str
+    seconds: float
+
+
+@dataclass(frozen=True)
+class Behaviour:
+    description: str
+    scene: str
+    steps: tuple[SkillStep | ActionStep, ...]
+    source: Path
+
+    @property
+    def skills(self) -> list[SkillStep]:
+        return [step for step in self.steps if isinstance(step, SkillStep)]
+
+
+def load_behaviour(path: str | Path) -> Behaviour:
+    """Read and validate a behaviour file."""
+    path = Path(path)
+    data = read_yaml(path)
+    check_keys(data, ("description", "scene", "steps"), path, required=("scene", "steps"))
+    steps = data["steps"]
+    if not isinstance(steps, list) or not steps:
+        raise ConfigError(f"{path}: 'steps' must be a non-empty list of skills and actions")
+    parsed = tuple(_step(item, path, index) for index, item in enumerate(steps))
+    names = [step.name for step in parsed if isinstance(step, SkillStep)]
+    if not names:
+        raise ConfigError(f"{path}: 'steps' has no skill")
+    if len(set(names)) != len(names):
+        raise ConfigError(f"{path}: skill names must be unique (got {', '.join(names)})")
+    return Behaviour(str(data.get("description", path.stem)), str(data["scene"]), parsed, path)
+
+
+def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:
+    where = f"steps[{index}]"
+    if isinstance(item, dict) and "action" in item:
+        check_keys(item, ("action", "seconds"), path, where)
+        if item["action"] not in ACTIONS:
+            raise ConfigError(f"{path}: '{where}.action' must be one of {', '.join(ACTIONS)} (got {item['action']!r})")
+        return ActionStep(item["action"], number(item.get("seconds", 1.0), path, f"{where}.seconds", positive=True))
+    check_keys(item, ("skill", "demos", "model", "states", "settle"), path, where, required=("skill",))
+    if ("demos" in item) == ("model" in item):
+        raise ConfigError(f"{path}: '{where}' needs exactly one of 'demos' (a folder to learn from) or 'model' (a model file)")
+    source_key = "demos" if "demos" in item else "model"
+    source = path.parent / str(item[source_key])
+    if not source.exists():
+        raise ConfigError(f"{path}: '{where}.{source_key}' names {item[source_key]}, which does not exist (paths are relative to the behaviour file)")
+    return SkillStep(
+        name=str(item["skill"]),
+        demos=source if source_key == "demos" else None,
+        model=source if source_key == "model" else None,
+        states=integer(item.get("states", 6), path, f"{where}.states", minimum=1),
+        settle=number(item.get("settle", DEFAULT_SETTLE), path, f"{where}.settle", minimum=0.0),
+    )
+
+
+def behaviour_models(behaviour: Behaviour) -> dict[str, HSMM]:
+    """The model of every skill, learned from its demonstrations or loaded."""
+    return {
+        step.name: learn_from_folder(step.demos, step.states)[0] if step.demos is not None else load_model(step.model)
+        for step in behaviour.skills
+    }
+
+
+def behaviour_reference(behaviour: Behaviour, models: dict[str, HSMM], open_width: float, duration: float | None = None) -> Reference:
+    """One reference for the whole behaviour; padded (holding the last pose) or cut to
+    `duration` seconds when given."""
+    pieces: list[np.ndarray] = []
+    grippers: list[np.ndarray] = []
+    events: list[tuple[float, str]] = []
+    clock, closed = 0.0, False
+    for step in behaviour.steps:
+        if isinstance(step, SkillStep):
+            model = models[step.name]
+            skill = reference_of(model, model.expected_duration() + step.settle)
+            positions = skill.positions
+        else:
+            events.append((clock, step.action))
+            closed = step.action == "grasp"
+            positions = np.repeat(pieces[-1][-1:] if pieces else _first_position(behaviour, models), _steps(step.seconds), axis=0)
+        pieces.append(positions)
+        grippers.append(np.full(len(positions), 0.0 if closed else open_width))
+        clock += len(positions) * TIME_STEP
+    positions, gripper = np.concatenate(pieces), np.concatenate(grippers)
+    if duration is not None:
+        count = _steps(duration) + 1
+        if count > len(positions):
+            extra = count - len(positions)
+            positions = np.concatenate([positions, np.repeat(positions[-1:], extra, axis=0)])
+            gripper = np.concatenate([gripper, np.repeat(gripper[-1:], extra)])
+        positions, gripper = positions[:count], gripper[:count]
+    times = np.arange(len(positions)) * TIME_STEP
+    kept = tuple((time, action) for time, action in events if time <= times[-1])
+    return Reference(times, positions, gripper, kept)
+
+
+def _steps(seconds: float) -> int:
+    return max(1, int(round(seconds / TIME_STEP)))
+
+
+def _first_position(behaviour: Behaviour, models: dict[str, HSMM]) -> np.ndarray:
+    first = models[behaviour.skills[0].name]
+    return reference_of(first, 2 * first.sample_period_).positions[:1]
+
+
+def reference_for(models: dict[str, HSMM], behaviour: Behaviour | None, open_width: float, duration: float | None = None) -> Reference:
+    """The reference of a behaviour, or of the single skill in `models` when there is none."""
+    if behaviour is not None:
+        return behaviour_reference(behaviour, models, open_width, duration)
+    if len(models) != 1:
+        raise ConfigError(f"several skills ({', '.join(models)}) but no behaviour to sequence them")
+    return reference_of(next(iter(models.values())), duration)
