@@ -3,12 +3,12 @@
 pick: from the home pose, a slow, roundabout path (via two points above the table, as a
 person guiding the arm might take) to above the shaft, then down to the grasp pose, in about
 26 s; so the learned pick reaches the shaft after 20 s.
-insert: from the grasp pose, lift, carry to above the holder, descend and stop; the demonstrated
-stop is 8 mm off the hole's centre in x (the paper's shift between end effector and holder),
+insert: from the grasp pose, lift, carry to above the holder, hover, descend straight and stop; the demonstrated
+stop is 10 mm off the hole's centre in x (the paper's shift between end effector and holder),
 so the learned insertion pushes the shaft onto the holder's edge.
 
 Both: minimum-jerk segments, varying timing and via points, 0.5 mm sensor noise, 100 Hz.
-Run from the repository root: python demos/make_pick_insert.py [--count 4] [--seed 11]
+Run from the repository root: python demos/make_pick_insert.py [--count 5] [--seed 11]
 """
 
 from __future__ import annotations
@@ -26,7 +26,10 @@ SENSOR_NOISE_M = 0.0005
 HOME = np.array([0.42, 0.0, 0.40])
 GRASP = np.array([0.45, -0.25, 0.11])  # the grasp-target link around the shaft (pick_insert scene)
 HOLE = np.array([0.55, 0.20, 0.115])  # shaft bottom 5 mm above the table inside the holder
-INSERTION_SHIFT = np.array([0.008, 0.0, 0.0])
+INSERTION_SHIFT = np.array([0.010, 0.0, 0.0])
+# Where each demonstration stops around the shifted hole (mm in x, y, z): people do not stop at
+# the same point twice, and this spread sets the bounds of the insertion's optimisation.
+STOP_SPREAD_MM = [(-6, 4, 3), (5, -5, -2), (0, 0, 5), (-3, -6, 0), (4, 6, 8)]
 
 
 def minimum_jerk(times: np.ndarray, waypoints: list[tuple[float, np.ndarray]]) -> np.ndarray:
@@ -52,7 +55,7 @@ def demonstration(rng: np.random.Generator, phases: list[tuple[np.ndarray, float
     return SignalTable(times, {"x": path[:, 0], "y": path[:, 1], "z": path[:, 2]})
 
 
-def pick(rng: np.random.Generator) -> SignalTable:
+def pick(rng: np.random.Generator, index: int) -> SignalTable:
     def near(point, spread):
         return np.asarray(point) + rng.normal(0, spread, size=3) * np.array([1, 1, 0.5])
 
@@ -68,26 +71,28 @@ def pick(rng: np.random.Generator) -> SignalTable:
     return demonstration(rng, phases, hold_end=3.0)
 
 
-def insert(rng: np.random.Generator) -> SignalTable:
+def insert(rng: np.random.Generator, index: int) -> SignalTable:
     def near(point, spread):
         return np.asarray(point) + rng.normal(0, spread, size=3) * np.array([1, 1, 0.3])
 
     lifted = GRASP + np.array([0.0, 0.0, 0.14])
-    stop = HOLE + INSERTION_SHIFT
+    stop = HOLE + INSERTION_SHIFT + np.array(STOP_SPREAD_MM[index % len(STOP_SPREAD_MM)]) / 1000
+    hover = near(stop + np.array([0, 0, 0.19]), 0.002)
     phases = [
         (GRASP, 0.0, 0.0),
-        (GRASP, 1.5, 0.3),
+        (GRASP, 2.5, 0.3),
         (near(lifted, 0.003), 2.5, 0.3),
         (near([0.52, -0.02, 0.27], 0.01), 3.0, 0.4),
-        (near(stop + np.array([0, 0, 0.135]), 0.004), 3.0, 0.4),
-        (near(stop, 0.004), 3.0, 0.4),
+        (hover, 3.0, 0.4),
+        (hover, 2.0, 0.3),  # steady above the holder, then straight down
+        (stop, 0.8, 0.1),
     ]
     return demonstration(rng, phases, hold_end=2.5)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--count", type=int, default=4)
+    parser.add_argument("--count", type=int, default=5)
     parser.add_argument("--seed", type=int, default=11)
     parser.add_argument("--out", type=Path, default=ROOT / "demos")
     args = parser.parse_args()
@@ -98,7 +103,7 @@ def main() -> None:
         for old in folder.glob("demo_*.csv"):
             old.unlink()
         for index in range(args.count):
-            write_signal_csv(make(rng), folder / f"demo_{index + 1:02d}.csv")
+            write_signal_csv(make(rng, index), folder / f"demo_{index + 1:02d}.csv")
 
 
 if __name__ == "__main__":

@@ -111,12 +111,16 @@ TOP_KEYS = ("name", "spec", "model", "demos", "behaviour", "states", "scene", "b
 
 
 def _parameters_to_yaml(parameters: Parameters) -> dict[str, Any]:
+    """The task-file form of a selection; blocks that select nothing are left out."""
     means, durations = parameters.means, parameters.durations
-    return {
-        "means": {"components": list(means.components), "coordinates": list(means.coordinates), "beta": means.beta},
-        "durations": {"components": durations.components if isinstance(durations.components, str) else list(durations.components), "width": durations.width},
-        "transitions": parameters.transitions,
-    }
+    block: dict[str, Any] = {}
+    if means.components:
+        block["means"] = {"components": list(means.components), "coordinates": list(means.coordinates), "beta": means.beta}
+    if durations.components:
+        components = durations.components if isinstance(durations.components, str) else list(durations.components)
+        block["durations"] = {"components": components, "width": durations.width}
+    block["transitions"] = parameters.transitions
+    return block
 
 
 def load_task(path: str | Path) -> Task:

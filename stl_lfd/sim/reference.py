@@ -119,7 +119,7 @@ def warn_if_untracked(rollout: Rollout, reference: Reference, tolerance: float) 
     target = reference.positions_at(np.array([time]))[0]
     warnings.warn(
         f"the robot did not follow the reference: worst tracking error {1000 * rollout.tracking_max:.1f} mm "
-        f"at t = {time:.2f} s (target x={target[0]:.3f} y={target[1]:.3f} z={target[2]:.3f}; outside the workspace?)",
+        f"at t = {time:.2f} s (target x={target[0]:.3f} y={target[1]:.3f} z={target[2]:.3f}: outside the workspace, or blocked by contact?)",
         TrackingWarning,
         stacklevel=3,
     )

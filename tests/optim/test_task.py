@@ -70,3 +70,19 @@ def test_command_line_overrides_are_checked_like_the_file(tmp_path):
     assert task.with_overrides(seed=4, trials=40).optimizer.seed == 4
     with pytest.raises(ConfigError, match="exceeds"):
         task.with_overrides(initial=50)
+
+
+def test_the_task_as_used_reads_back_the_same(tmp_path):
+    task = load_task(write_task(tmp_path, "parameters:\n  durations: {components: [2, 4], width: 0.5}\n  transitions: band\n"))
+    import yaml
+
+    again = tmp_path / "again.yaml"
+    again.write_text(yaml.safe_dump(task.to_yaml_dict()))
+    reread = load_task(again)
+    assert reread.parameters == task.parameters and reread.optimizer == task.optimizer and reread.spec == task.spec.resolve()
+
+
+def test_behaviour_tasks_take_parameters_per_skill(learned_model):
+    task = load_task(CONFIGS / "phi3.yaml")
+    assert set(task.parameters) == {"pick", "insert"} and task.scene == "pick_insert"
+    assert task.parameters["pick"].transitions == "band" and task.parameters["insert"].means.components == (6,)

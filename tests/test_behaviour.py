@@ -1,0 +1,75 @@
+"""Behaviour files and the joined reference of a behaviour."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from stl_lfd.behaviour import ActionStep, behaviour_reference, load_behaviour
+from stl_lfd.errors import ConfigError
+from stl_lfd.optim import load_task
+from stl_lfd.sim.panda import TIME_STEP
+from tests.conftest import ROOT
+
+BEHAVIOUR = ROOT / "configs" / "behaviours" / "pick_insert.yaml"
+
+
+def test_the_bundled_behaviour_reads():
+    behaviour = load_behaviour(BEHAVIOUR)
+    assert behaviour.scene == "pick_insert"
+    assert [step.name for step in behaviour.skills] == ["pick", "insert"]
+    assert [step.action for step in behaviour.steps if isinstance(step, ActionStep)] == ["grasp", "release"]
+
+
+def test_the_reference_joins_skills_and_actions(learned_model):
+    behaviour = load_behaviour(BEHAVIOUR)
+    models = {"pick": learned_model, "insert": learned_model}
+    reference = behaviour_reference(behaviour, models, open_width=0.08)
+    (grasp_time, grasp), (release_time, release) = reference.events
+    assert (grasp, release) == ("grasp", "release")
+    first_skill = learned_model.expected_duration() + 1.0
+    assert grasp_time == pytest.approx(first_skill, abs=2 * TIME_STEP)
+    closed = (reference.times >= grasp_time) & (reference.times < release_time)
+    assert np.all(reference.gripper[closed] == 0.0) and np.all(reference.gripper[~closed] == 0.08)
+    hold = (reference.times >= grasp_time) & (reference.times < grasp_time + 1.0)
+    assert np.ptp(reference.positions[hold], axis=0).max() == 0.0  # the hand holds still while grasping
+    padded = behaviour_reference(behaviour, models, 0.08, duration=reference.duration + 5)
+    assert padded.duration == pytest.approx(reference.duration + 5, abs=TIME_STEP)
+    assert np.all(padded.positions[-1] == reference.positions[-1])
+
+
+def write(tmp_path: Path, text: str) -> Path:
+    (tmp_path / "demos").mkdir(exist_ok=True)
+    path = tmp_path / "behaviour.yaml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("scene: s\nsteps:\n  - {skill: a, demos: demos, colour: red}\n", r"unknown key 'steps\[0\].colour'"),
+        ("scene: s\nsteps:\n  - {action: wave}\n", r"'steps\[0\].action' must be one of grasp, release"),
+        ("scene: s\nsteps:\n  - {skill: a, demos: nowhere}\n", r"'steps\[0\].demos' names nowhere, which does not exist"),
+        ("scene: s\nsteps:\n  - {skill: a}\n", r"'steps\[0\]' needs exactly one of 'demos'"),
+        ("scene: s\nsteps:\n  - {skill: a, demos: demos}\n  - {skill: a, demos: demos}\n", "skill names must be unique"),
+        ("scene: s\nsteps:\n  - {action: grasp}\n", "'steps' has no skill"),
+        ("scene: s\nsteps: []\n", "'steps' must be a non-empty list"),
+        ("steps:\n  - {skill: a, demos: demos}\n", "missing key 'scene'"),
+    ],
+)
+def test_bad_behaviour_files_name_the_file_and_the_step(tmp_path, text, message):
+    path = write(tmp_path, text)
+    with pytest.raises(ConfigError, match=message) as error:
+        load_behaviour(path)
+    assert str(path) in str(error.value)
+
+
+def test_task_parameters_must_name_skills_of_the_behaviour(tmp_path):
+    path = tmp_path / "task.yaml"
+    path.write_text(
+        f"spec: {ROOT / 'specs' / 'phi3.stl'}\nbehaviour: {BEHAVIOUR}\nduration: 48\n"
+        "parameters:\n  place:\n    durations: {components: all}\n"
+    )
+    with pytest.raises(ConfigError, match="unknown key 'parameters.place' \\(known: pick, insert\\)"):
+        load_task(path)
