@@ -85,4 +85,4 @@ def test_the_task_as_used_reads_back_the_same(tmp_path):
 def test_behaviour_tasks_take_parameters_per_skill(learned_model):
     task = load_task(CONFIGS / "phi3.yaml")
     assert set(task.parameters) == {"pick", "insert"} and task.scene == "pick_insert"
-    assert task.parameters["pick"].transitions == "band" and task.parameters["insert"].means.components == (6,)
+    assert task.parameters["pick"].transitions == "band" and task.parameters["insert"].means.components == (5, 6)
