@@ -4,7 +4,7 @@ pick: from the home pose, a slow, roundabout path (via two points above the tabl
 person guiding the arm might take) to above the shaft, then down to the grasp pose, in about
 26 s; so the learned pick reaches the shaft after 20 s.
 insert: from the grasp pose, lift, carry to above the holder, hover, descend straight and stop; the demonstrated
-stop is 10 mm off the hole's centre in x (the paper's shift between end effector and holder),
+stop is 8 mm off the hole's centre in x (the paper's shift between end effector and holder),
 so the learned insertion pushes the shaft onto the holder's edge.
 
 Both: minimum-jerk segments, varying timing and via points, 0.5 mm sensor noise, 100 Hz.
@@ -26,7 +26,7 @@ SENSOR_NOISE_M = 0.0005
 HOME = np.array([0.42, 0.0, 0.40])
 GRASP = np.array([0.45, -0.25, 0.11])  # the grasp-target link around the shaft (pick_insert scene)
 HOLE = np.array([0.55, 0.20, 0.115])  # shaft bottom 5 mm above the table inside the holder
-INSERTION_SHIFT = np.array([0.010, 0.0, 0.0])
+INSERTION_SHIFT = np.array([0.008, 0.0, 0.0])
 # Where each demonstration stops around the shifted hole (mm in x, y, z): people do not stop at
 # the same point twice, and this spread sets the bounds of the insertion's optimisation.
 STOP_SPREAD_MM = [(-6, 4, 3), (5, -5, -2), (0, 0, 5), (-3, -6, 0), (4, 6, 8)]

@@ -73,3 +73,30 @@ def test_task_parameters_must_name_skills_of_the_behaviour(tmp_path):
     )
     with pytest.raises(ConfigError, match="unknown key 'parameters.place' \\(known: pick, insert\\)"):
         load_task(path)
+
+
+@pytest.fixture(scope="module")
+def pick_insert_models():
+    from stl_lfd.behaviour import behaviour_models
+
+    return behaviour_models(load_behaviour(BEHAVIOUR))
+
+
+def test_the_unoptimised_behaviour_picks_then_pushes_the_shaft_onto_the_holder(pick_insert_models):
+    import warnings
+
+    from stl_lfd.sim import TrackingWarning, execute, load_scene
+
+    behaviour, scene = load_behaviour(BEHAVIOUR), load_scene("pick_insert")
+    reference = behaviour_reference(behaviour, pick_insert_models, scene.gripper_opening, 48)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", TrackingWarning)
+        runs = [execute(reference, scene, "pybullet").signals for _ in range(3)]
+    force, times = runs[0].columns["force"], runs[0].times
+    grasp_time = reference.events[0][0]
+    assert force[times < grasp_time - 0.5].max() < 1e-3  # reaching for the shaft touches nothing
+    assert force.max() > 50  # the shifted insertion hits the holder's edge
+    # consecutive rollouts with contacts and a grasp give identical signals
+    for other in runs[1:]:
+        for name in runs[0].columns:
+            assert np.array_equal(runs[0].columns[name], other.columns[name]), name

@@ -3,7 +3,9 @@ becomes a model.
 
 A point `x` is a `d` vector, ordered: the selected state means (state by state, coordinate by
 coordinate), the selected duration means, then the selected transition entries. Bounds follow
-the paper: mean +- beta standard deviations of the state's covariance per coordinate, duration
+the paper: mean +- beta standard deviations of the state's covariance per coordinate (states
+moved `together` share one position parameter per coordinate, bounded by the smallest of
+their standard deviations), duration
 mean +- width duration standard deviations (never below one sample period), and [0, 1] for
 transition entries, whose rows are renormalised before retrieval.
 """
@@ -35,7 +37,7 @@ class ParameterSpace:
     lower: np.ndarray
     upper: np.ndarray
     initial: np.ndarray
-    mean_slots: tuple[tuple[int, int], ...]
+    mean_slots: tuple[tuple[tuple[int, ...], int], ...]
     duration_slots: tuple[int, ...]
     transition_slots: tuple[tuple[int, int], ...]
 
@@ -56,8 +58,10 @@ class ParameterSpace:
         changed.duration_means_ = np.array(model.duration_means_, dtype=float)
         changed.transmat_ = np.array(model.transmat_, dtype=float)
         values = iter(x)
-        for state, coordinate in self.mean_slots:
-            changed.means_[state, coordinate] = next(values)
+        for group, coordinate in self.mean_slots:
+            shift = next(values) - model.means_[group[0], coordinate]
+            for state in group:  # a group moves together: the first state's position, the others by as much
+                changed.means_[state, coordinate] = model.means_[state, coordinate] + shift
         for state in self.duration_slots:
             changed.duration_means_[state] = next(values)
         for source, target in self.transition_slots:
@@ -86,15 +90,18 @@ def build_space(model: HSMM, parameters: Parameters, source: Path | str = "task"
 
     means = parameters.means
     mean_slots = []
-    for state in _states(means.components, K, source, "parameters.means.components"):
-        stds = np.sqrt(np.diag(model.covars_[state]))
+    states = _states(means.components, K, source, "parameters.means.components")
+    groups = [tuple(states)] if means.together else [(state,) for state in states]
+    for group in groups:
+        stds = np.min([np.sqrt(np.diag(model.covars_[state])) for state in group], axis=0)
+        label = "+".join(str(state + 1) for state in group)
         for name in means.coordinates:
             if name not in model.signal_names_:
                 raise ConfigError(f"{source}: 'parameters.means.coordinates' names {name}, which the model does not have ({', '.join(model.signal_names_)})")
             coordinate = model.signal_names_.index(name)
-            value, spread = model.means_[state, coordinate], means.beta * stds[coordinate]
-            add(f"mean[{state + 1}].{name}", value, value - spread, value + spread)
-            mean_slots.append((state, coordinate))
+            value, spread = model.means_[group[0], coordinate], means.beta * stds[coordinate]
+            add(f"mean[{label}].{name}", value, value - spread, value + spread)
+            mean_slots.append((group, coordinate))
 
     durations = parameters.durations
     duration_slots = []

@@ -23,11 +23,13 @@ COORDINATES = ("x", "y", "z")
 
 @dataclass(frozen=True)
 class MeanParameters:
-    """State means to optimise: `components` (1-based), `coordinates`, bounds mean +- beta std."""
+    """State means to optimise: `components` (1-based), `coordinates`, bounds mean +- beta std;
+    `together` moves the components by one shared offset (e.g. an approach and a final pose)."""
 
     components: tuple[int, ...] = ()
     coordinates: tuple[str, ...] = COORDINATES
     beta: float = 2.0
+    together: bool = False
 
 
 @dataclass(frozen=True)
@@ -115,7 +117,7 @@ def _parameters_to_yaml(parameters: Parameters) -> dict[str, Any]:
     means, durations = parameters.means, parameters.durations
     block: dict[str, Any] = {}
     if means.components:
-        block["means"] = {"components": list(means.components), "coordinates": list(means.coordinates), "beta": means.beta}
+        block["means"] = {"components": list(means.components), "coordinates": list(means.coordinates), "beta": means.beta, "together": means.together}
     if durations.components:
         components = durations.components if isinstance(durations.components, str) else list(durations.components)
         block["durations"] = {"components": components, "width": durations.width}
@@ -188,7 +190,9 @@ def _parameters(data: Any, path: Path, where: str) -> Parameters:
     check_keys(data, ("means", "durations", "transitions"), path, where)
     means, durations = MeanParameters(), DurationParameters()
     if "means" in data:
-        item = check_keys(data["means"], ("components", "coordinates", "beta"), path, f"{where}.means", required=("components",))
+        item = check_keys(data["means"], ("components", "coordinates", "beta", "together"), path, f"{where}.means", required=("components",))
+        if not isinstance(item.get("together", False), bool):
+            raise ConfigError(f"{path}: '{where}.means.together' must be true or false")
         coordinates = tuple(item.get("coordinates", COORDINATES))
         for coordinate in coordinates:
             if coordinate not in COORDINATES:
@@ -197,6 +201,7 @@ def _parameters(data: Any, path: Path, where: str) -> Parameters:
             components=_components(item["components"], path, f"{where}.means.components", allow_all=False),
             coordinates=coordinates,
             beta=number(item.get("beta", 2.0), path, f"{where}.means.beta", positive=True),
+            together=item.get("together", False),
         )
     if "durations" in data:
         item = check_keys(data["durations"], ("components", "width"), path, f"{where}.durations", required=("components",))

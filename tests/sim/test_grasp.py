@@ -92,3 +92,4 @@ def test_a_misaligned_insertion_pushes_hard_on_the_holder():
 def test_a_grasp_with_nothing_in_reach_fails_the_rollout():
     with pytest.raises(ExecutionError, match=r"grasp at t = 3.00 s: nothing within 30 mm of the hand"):
         execute(pick_and_place(grasp_at=GRASP + [0.0, 0.1, 0.0]), SCENE, "pybullet")
+
