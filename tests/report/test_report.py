@@ -73,3 +73,16 @@ def test_report_errors_are_one_line(run_dir, tmp_path):
     assert missing.exit_code == 5 and "not a run directory" in missing.stderr
     bad = runner.invoke(app, ["report", str(run_dir), "--out", str(tmp_path / "r"), "--gp-parameter", "mean[9].q"])
     assert bad.exit_code == 5 and "is not a parameter of the run" in bad.stderr
+
+
+def test_report_of_a_behaviour_run_draws_each_skill(tmp_path):
+    from stl_lfd.optim import load_task
+
+    task = load_task(ROOT / "configs" / "phi3_strict.yaml").with_overrides(backend="kinematic", trials=3, initial=2)
+    optimise(start_run(task, tmp_path / "run"))
+    result = runner.invoke(app, ["report", str(tmp_path / "run"), "--out", str(tmp_path / "report")])
+    assert result.exit_code == 0, result.stderr
+    for name in FIGURES:
+        assert_picture(tmp_path / "report" / f"{name}.png")
+    page = (tmp_path / "report" / "index.html").read_text()
+    assert "pick.duration[1]" in page and "insert.mean[5+6].x" in page
