@@ -1,4 +1,4 @@
-"""Skill model: learning K = 6 from five 20 s demonstrations at 100 Hz, and one retrieval of a
+"""Skill model: learning K = 6 from five 22 s demonstrations at 100 Hz, and one retrieval of a
 20 s trajectory at 240 Hz (the optimiser retrieves once per trial)."""
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ def main() -> None:
     print_table(
         "Skill model (HSMM + LQT)",
         [
-            Row("learn K = 6", "5 demos x 20 s at 100 Hz", learn_seconds, 2.0, f"{len(model.monitor_.history)} EM iterations"),
+            Row("learn K = 6", "5 demos x 22 s at 100 Hz", learn_seconds, 2.0, f"{len(model.monitor_.history)} EM iterations"),
             Row("retrieve", "20 s at 240 Hz (4,801 samples)", retrieve_seconds, 0.030, f"model period {model.sample_period_:g} s"),
         ],
     )

@@ -16,6 +16,7 @@ import statistics
 import tempfile
 import time
 import warnings
+import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -28,6 +29,8 @@ from stl_lfd.optim import load_task, optimise, start_run
 from stl_lfd.optim.acquisition import propose
 
 ROOT = Path(__file__).resolve().parent.parent
+# Workers are spawned, not forked: forking after torch or pybullet started threads deadlocks.
+SPAWN = multiprocessing.get_context("spawn")
 METHODS = ("pi", "logei", "random")
 
 
@@ -60,7 +63,7 @@ def one_run(arguments: tuple[str, str, str, str, int]) -> dict:
 
 def comparison(backend: str, seeds: int, semantics: str, workers: int = 2) -> list[dict]:
     jobs = [(spec, method, semantics, backend, seed) for spec in ("phi1", "phi2") for method in METHODS for seed in range(seeds)]
-    with ProcessPoolExecutor(workers) as pool:
+    with ProcessPoolExecutor(workers, mp_context=SPAWN) as pool:
         return list(pool.map(one_run, jobs))
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import tempfile
 import warnings
+import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -26,6 +27,8 @@ from stl_lfd.stl import load_spec
 from stl_lfd.stl.regions import region_boxes
 
 ROOT = Path(__file__).resolve().parent.parent
+# Workers are spawned, not forked: forking after torch or pybullet started threads deadlocks.
+SPAWN = multiprocessing.get_context("spawn")
 
 
 def inside(table, box) -> np.ndarray:
@@ -61,7 +64,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seeds", type=int, default=5)
     args = parser.parse_args(argv)
     jobs = [(spec, seed) for spec in args.specs.split(",") for seed in range(args.seeds)]
-    with ProcessPoolExecutor(2) as pool:
+    with ProcessPoolExecutor(2, mp_context=SPAWN) as pool:
         results = list(pool.map(one_run, jobs))
     table = Table(title="phi3 over seeds (pybullet, 16 trials: 8 Sobol + PI)", title_justify="left")
     for column in ("spec", "seed", "satisfied", "first", "peak force before → after (N)", "pick at shaft before → after (s)", "pick states", "time"):
