@@ -161,19 +161,15 @@ class PandaWorld:
         """Attach the movable object nearest the grasp-target link with a fixed constraint at
         their current relative pose; an ExecutionError when none is within reach."""
         hand = self.end_effector()
-        candidates = []
-        for body in self.movable:
-            position = np.array(self.client.getBasePositionAndOrientation(body)[0])
-            _, distance = self._closest_point(body)
-            candidates.append((distance, body, position))
-        reachable = [item for item in candidates if item[0] <= self.scene.grasp_distance]
+        distances = {body: self._distance_to(body, hand) for body in self.movable}
+        reachable = {body: distance for body, distance in distances.items() if distance <= self.scene.grasp_distance}
         if not reachable:
-            nearest = min((item[0] for item in candidates), default=float("inf"))
+            nearest = min(distances.values(), default=float("inf"))
             raise ExecutionError(
                 f"grasp at t = {time:.2f} s: nothing within {1000 * self.scene.grasp_distance:.0f} mm of the hand "
                 f"at x={hand[0]:.3f} y={hand[1]:.3f} z={hand[2]:.3f} (nearest object {1000 * nearest:.0f} mm away)"
             )
-        _, body, _ = min(reachable, key=lambda item: item[0])
+        body = min(reachable, key=reachable.get)
         link_state = self.client.getLinkState(self.robot, END_EFFECTOR_LINK, computeForwardKinematics=1)
         link_position, link_orientation = link_state[4], link_state[5]
         body_position, body_orientation = self.client.getBasePositionAndOrientation(body)
@@ -185,13 +181,12 @@ class PandaWorld:
         self.client.changeConstraint(constraint, maxForce=GRASP_FORCE)
         self.held = (body, constraint)
 
-    def _closest_point(self, body: int) -> tuple[int, float]:
-        """Distance (m) from the grasp-target point to the surface of `body` (0 when inside)."""
-        hand = self.end_effector()
+    def _distance_to(self, body: int, point: np.ndarray) -> float:
+        """Distance (m) from `point` to the surface of `body` (0 when inside)."""
         position, orientation = self.client.getBasePositionAndOrientation(body)
         inverse = self.client.invertTransform(position, orientation)
-        local = np.array(self.client.multiplyTransforms(inverse[0], inverse[1], list(hand), [0, 0, 0, 1])[0])
-        return body, _distance_to_shape(self.client.getCollisionShapeData(body, -1)[0], local)
+        local = np.array(self.client.multiplyTransforms(inverse[0], inverse[1], list(point), [0, 0, 0, 1])[0])
+        return _distance_to_shape(self.client.getCollisionShapeData(body, -1)[0], local)
 
     def release(self) -> None:
         """Let go of the held object, if any."""

@@ -93,3 +93,19 @@ def test_a_grasp_with_nothing_in_reach_fails_the_rollout():
     with pytest.raises(ExecutionError, match=r"grasp at t = 3.00 s: nothing within 30 mm of the hand"):
         execute(pick_and_place(grasp_at=GRASP + [0.0, 0.1, 0.0]), SCENE, "pybullet")
 
+
+
+@pytest.mark.parametrize(
+    "shape, point, distance",
+    [
+        ((0, -1, 3, (0.2, 0.1, 0.1)), (0.0, 0.0, 0.0), 0.0),  # box, full extents: inside
+        ((0, -1, 3, (0.2, 0.1, 0.1)), (0.13, 0.0, 0.0), 0.03),
+        ((0, -1, 4, (0.12, 0.01)), (0.0, 0.04, 0.0), 0.03),  # cylinder (height, radius), beside
+        ((0, -1, 4, (0.12, 0.01)), (0.0, 0.0, 0.1), 0.04),  # above its top
+        ((0, -1, 2, (0.05,)), (0.0, 0.0, 0.08), 0.03),  # sphere
+    ],
+)
+def test_distance_to_collision_shapes(shape, point, distance):
+    from stl_lfd.sim.panda import _distance_to_shape
+
+    assert _distance_to_shape(shape, np.array(point)) == pytest.approx(distance)
