@@ -254,6 +254,7 @@ def replay(
 
 
 class MethodOption(str, Enum):
+    stl = "stl"
     pi = "pi"
     logei = "logei"
     random = "random"
@@ -269,7 +270,7 @@ def optimize(
     out: Optional[Path] = typer.Option(None, "--out", help="Run directory (default: runs/<task name>)."),
     resume: bool = typer.Option(False, "--resume", help="Continue the run in --out (or runs/<task name>) where it stopped."),
     backend: Optional[BackendOption] = typer.Option(None, help="Execution backend (default: the task's)."),
-    method: Optional[MethodOption] = typer.Option(None, help="pi (the paper), logei, or random search (default: the task's)."),
+    method: Optional[MethodOption] = typer.Option(None, help="stl (composite BO on the spec's parts), pi (the paper), logei, or random search (default: the task's)."),
 ) -> None:
     """Optimise a skill so that its execution satisfies the task's STL specification.
 

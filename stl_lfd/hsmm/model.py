@@ -115,9 +115,41 @@ class HSMM:
     # --- generation ------------------------------------------------------------------------
 
     def state_sequence(self, steps: int, dt: float | None = None) -> np.ndarray:
-        """Most likely state at each of `steps` steps of `dt` seconds (default the model's
-        sample period), from the explicit-duration forward variable without observations."""
-        return self.state_probabilities(steps, dt).argmax(axis=1)
+        """The state followed at each of `steps` steps of `dt` seconds (default the model's
+        sample period): the `nominal_path`, each state held for its duration mean, the last
+        one until the end.
+
+        This is the paper's rule and always a feasible path of the model: every switch is a
+        transition of positive probability (the argmax of the marginal occupancy is not: it
+        can skip a state and take a transition of probability 0). Switches fall at the rounded
+        cumulative duration means (each state keeps one step at least), so the sequence reaches
+        its last state after
+        `expected_duration()` minus that state's duration.
+        """
+        self._check()
+        dt = self.sample_period_ if dt is None else dt
+        path = self.nominal_path()
+        sequence = np.full(steps, path[-1], dtype=int)
+        start = 0
+        for state, end in zip(path[:-1], np.cumsum(self.duration_means_[path[:-1]]) / dt):
+            stop = max(int(round(end)), start + 1)  # every state of the path lasts a step at least
+            sequence[start:stop] = state
+            start = stop
+        return sequence
+
+    def nominal_path(self) -> list[int]:
+        """States in the order the skill visits them: from the most likely first state, the
+        most likely successor of each, until a state without successors or one already visited.
+        Ties go to the lower state number."""
+        self._check()
+        transmat = self.normalized_transmat()
+        path = [int(np.argmax(self.startprob_))]
+        while transmat[path[-1]].sum() > 0:
+            successor = int(np.argmax(transmat[path[-1]]))
+            if successor in path:
+                break
+            path.append(successor)
+        return path
 
     def state_probabilities(self, steps: int, dt: float | None = None) -> np.ndarray:
         """`steps x K` probabilities of being in each state (rows sum to 1)."""
@@ -129,18 +161,8 @@ class HSMM:
         return state_occupancy(self.startprob_, self.normalized_transmat(), pmf, steps)
 
     def expected_duration(self) -> float:
-        """Seconds the nominal state sequence takes: the duration means along the most likely
-        successors from the most likely first state."""
-        self._check()
-        transmat = self.normalized_transmat()
-        state, total, seen = int(np.argmax(self.startprob_)), 0.0, set()
-        while state not in seen:
-            seen.add(state)
-            total += float(self.duration_means_[state])
-            if transmat[state].sum() <= 0:
-                break
-            state = int(np.argmax(transmat[state]))
-        return total
+        """Seconds the nominal state sequence takes: the duration means along `nominal_path`."""
+        return float(np.sum(self.duration_means_[self.nominal_path()]))
 
     def sample(self, duration: float, random_state: int | np.random.Generator | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Draw one sequence of `duration` seconds at the model's sample period.

@@ -8,6 +8,8 @@ commands that never optimise should not pay.
 from __future__ import annotations
 
 import warnings
+from contextlib import contextmanager
+from typing import Iterator
 
 import numpy as np
 
@@ -54,10 +56,19 @@ def propose(X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, method: str, xi: f
     import torch
 
     torch.manual_seed(seed)
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)  # see SINGLE_THREAD
-    try:
+    with single_threaded():
         return _maximise(X, Y, bounds, method, xi, seed)
+
+
+@contextmanager
+def single_threaded() -> Iterator[None]:
+    """Torch on one thread for the block (see SINGLE_THREAD), restored afterwards."""
+    import torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
     finally:
         torch.set_num_threads(threads)
 

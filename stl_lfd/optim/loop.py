@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 import traceback
+import warnings
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -17,6 +18,7 @@ import numpy as np
 
 from stl_lfd.optim.acquisition import propose, random_point, sobol_points
 from stl_lfd.optim.task import Optimizer
+from stl_lfd.stl import SpecParts
 
 
 @dataclass
@@ -25,9 +27,11 @@ class Trial:
 
     Attributes:
         trial: 1-based number.
-        phase: `sobol` (the M initial trials), `pi`, `logei` or `random`.
+        phase: `sobol` (the M initial trials), `stl`, `pi`, `logei` or `random`.
         x: `d` parameter values.
         robustness: the objective, or None when the trial failed.
+        components: the robustness of each top-level part of the spec (its text -> value),
+            of which `robustness` is the composition; None when the trial failed.
         status: `ok` or `failed` (then `error` says why).
         optimizer_seconds: time spent choosing x (GP fit and acquisition).
         rollout_seconds: time spent executing and evaluating x.
@@ -42,6 +46,7 @@ class Trial:
     optimizer_seconds: float = 0.0
     rollout_seconds: float = 0.0
     parameters: dict[str, float] = field(default_factory=dict)
+    components: dict[str, float] | None = None
 
     @property
     def satisfied(self) -> bool:
@@ -54,23 +59,74 @@ class Trial:
 
 @dataclass
 class Outcome:
-    """What the objective returns for one point; `payload` is kept for the caller (signals)."""
+    """What the objective returns for one point: the robustness, its parts (text -> value), and
+    a `payload` kept for the caller (signals)."""
 
     robustness: float
     payload: object = None
+    components: dict[str, float] | None = None
 
 
-def next_point(history: list[Trial], bounds: np.ndarray, optimizer: Optimizer) -> tuple[np.ndarray, str]:
-    """The point of trial `len(history) + 1` and the phase that chose it."""
+def next_point(
+    history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None = None, baseline: Trial | None = None
+) -> tuple[np.ndarray, str]:
+    """The point of trial `len(history) + 1` and the phase that chose it.
+
+    Method `stl` models each of `parts` (the spec's top-level conjuncts) and also learns from
+    `baseline`, the unoptimised skill executed before the trials (when its parts are known);
+    the other methods are the paper's algorithm and its baselines, and see the trials alone.
+    """
     index = len(history)
     if index < optimizer.initial:
         return sobol_points(bounds, optimizer.initial, optimizer.seed)[index], "sobol"
     if optimizer.method == "random":
         return random_point(bounds, optimizer.seed, index), "random"
+    if optimizer.method == "stl":
+        return _composite_point(history, bounds, optimizer, parts, baseline), "stl"
     X, Y = observations(history)
     if len(Y) == 0:  # every trial so far failed: nothing to model yet
         return random_point(bounds, optimizer.seed, index), "random"
     return propose(X, Y, bounds, optimizer.method, optimizer.xi, optimizer.seed + index), optimizer.method
+
+
+def _composite_point(history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None, baseline: Trial | None) -> np.ndarray:
+    from stl_lfd.optim.composite import propose_composite
+    from stl_lfd.stl import Semantics
+
+    index = len(history)
+    names = parts.names if parts is not None else ()
+    usable = bool(names) and baseline is not None and baseline.robustness is not None and part_observations([baseline], names) is not None
+    seen = [baseline] + history if usable else history
+    X, Y = observations(seen)
+    if len(Y) == 0:
+        return random_point(bounds, optimizer.seed, index)
+    composite = part_observations(seen, names) if names else None
+    semantics = parts.semantics if parts is not None else Semantics("classic")
+    if composite is None:  # trials recorded without their parts (an older run): the robustness alone
+        composite, semantics = Y[:, None], Semantics("classic")
+    design = optimizer.initial + (1 if usable else 0)
+    return propose_composite(X, composite, Y, bounds, semantics, design, optimizer.seed + index)
+
+
+def part_observations(history: list[Trial], names: tuple[str, ...]) -> np.ndarray | None:
+    """`n x m` robustness of each part at each trial (failed trials enter with each part's worst
+    value, as in `observations`), or None when a successful trial did not record its parts."""
+    rows = []
+    for trial in history:
+        if trial.robustness is None:
+            rows.append(None)
+        elif trial.components is None or any(name not in trial.components for name in names):
+            return None
+        else:
+            rows.append([trial.components[name] for name in names])
+    recorded = np.array([row for row in rows if row is not None], dtype=float)
+    finite = np.where(np.isfinite(recorded), recorded, np.nan)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a part infinite at every trial
+        worst, best = np.nanmin(finite, axis=0), np.nanmax(finite, axis=0)
+    # An infinite part (an empty window) is clipped to the values seen, so the GP sees numbers.
+    worst, best = np.nan_to_num(worst, nan=0.0), np.nan_to_num(best, nan=0.0)
+    return np.array([np.clip(row, worst, best) if row is not None else worst for row in rows], dtype=float)
 
 
 def observations(history: list[Trial]) -> tuple[np.ndarray, np.ndarray]:
@@ -91,9 +147,12 @@ def run_trials(
     optimizer: Optimizer,
     history: list[Trial],
     on_trial: Callable[[Trial, object], None],
+    parts: SpecParts | None = None,
+    baseline: Trial | None = None,
 ) -> list[Trial]:
     """Run trials until `optimizer.trials` are done, calling `on_trial(trial, payload)` after
-    each (to record it) and returning the whole history.
+    each (to record it) and returning the whole history. `parts` and `baseline` are what
+    method `stl` models besides the trials (see `next_point`).
 
     A trial whose objective raises or returns a non-finite value is recorded as failed with
     its error; the loop goes on.
@@ -101,7 +160,7 @@ def run_trials(
     history = list(history)
     while len(history) < optimizer.trials:
         start = time.perf_counter()
-        x, phase = next_point(history, bounds, optimizer)
+        x, phase = next_point(history, bounds, optimizer, parts, baseline)
         chosen = time.perf_counter()
         trial = Trial(len(history) + 1, phase, x, None, optimizer_seconds=chosen - start)
         payload = None
@@ -111,6 +170,7 @@ def run_trials(
             if not np.isfinite(outcome.robustness):
                 raise ValueError(f"robustness is {outcome.robustness}")
             trial.robustness = float(outcome.robustness)
+            trial.components = outcome.components
         except Exception as error:  # any failure of one rollout is recorded, not fatal
             trial.status, trial.error = "failed", _describe(error)
         trial.rollout_seconds = time.perf_counter() - chosen

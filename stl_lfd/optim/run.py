@@ -18,15 +18,18 @@ from stl_lfd.optim.rundir import RunDirectory
 from stl_lfd.optim.space import SearchSpace, build_search_space
 from stl_lfd.optim.task import SINGLE_SKILL, Task
 from stl_lfd.sim import Scene, execute, load_scene
-from stl_lfd.stl import Robustness, compile_spec, load_spec
+from stl_lfd.stl import Robustness, SpecParts, compile_spec, load_spec, split_spec
 
 
 class SkillObjective:
     """x -> adapted models -> (behaviour) reference -> rollout -> robustness of the recorded
-    signals (payload: the signals)."""
+    signals and of the spec's top-level parts (payload: the signals)."""
 
-    def __init__(self, models: dict[str, HSMM], space: SearchSpace, task: Task, behaviour: Behaviour | None, scene: Scene, robustness: Robustness) -> None:
-        self.models, self.space, self.task, self.behaviour, self.scene, self.robustness = models, space, task, behaviour, scene, robustness
+    def __init__(
+        self, models: dict[str, HSMM], space: SearchSpace, task: Task, behaviour: Behaviour | None, scene: Scene, robustness: Robustness, parts: SpecParts
+    ) -> None:
+        self.models, self.space, self.task, self.behaviour, self.scene = models, space, task, behaviour, scene
+        self.robustness, self.parts = robustness, parts
 
     def __call__(self, x: np.ndarray) -> Outcome:
         return self.evaluate(self.space.apply(self.models, x))
@@ -34,7 +37,8 @@ class SkillObjective:
     def evaluate(self, models: dict[str, HSMM]) -> Outcome:
         reference = reference_for(models, self.behaviour, self.scene.gripper_opening, self.task.duration)
         signals = execute(reference, self.scene, self.task.backend, self.task.rate).signals
-        return Outcome(self.robustness(signals.columns, signals.times), signals)
+        components = dict(zip(self.parts.names, self.parts(signals.columns, signals.times).tolist()))
+        return Outcome(self.robustness(signals.columns, signals.times), signals, components)
 
 
 @dataclass
@@ -61,7 +65,8 @@ def objective_for(task: Task, models: dict[str, HSMM]) -> tuple[SearchSpace, Ski
     """The parameter space and the objective of `task`; spec problems are found here, before
     any trial: unknown signals, and windows that reach past the rollout duration."""
     space = build_search_space(models, task.parameters, task.source)
-    robustness = compile_spec(load_spec(task.spec), task.semantics, task.nu, source=str(task.spec))
+    spec = load_spec(task.spec)
+    robustness = compile_spec(spec, task.semantics, task.nu, source=str(task.spec))
     if robustness.horizon > task.duration + 1e-9:
         raise ConfigError(
             f"{task.source}: the spec {task.spec.name} looks {robustness.horizon:g} s ahead but rollouts last "
@@ -72,7 +77,8 @@ def objective_for(task: Task, models: dict[str, HSMM]) -> tuple[SearchSpace, Ski
     if unknown:
         raise SpecError(f"{task.spec}: signal {', '.join(unknown)} is not recorded by rollouts (they record {', '.join(sorted(recorded))})")
     behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None
-    return space, SkillObjective(models, space, task, behaviour, load_scene(task.scene), robustness)
+    parts = split_spec(spec, task.semantics, task.nu, source=str(task.spec))
+    return space, SkillObjective(models, space, task, behaviour, load_scene(task.scene), robustness, parts)
 
 
 def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lambda message: None) -> PreparedRun:
@@ -83,7 +89,7 @@ def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lam
     space, objective = objective_for(task, models)
     start = time.perf_counter()
     initial = objective.evaluate(models)
-    summary = _summary(task, space, float(initial.robustness), [], time.perf_counter() - start)
+    summary = _summary(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
     run = RunDirectory.create(out, task, models, initial.payload, summary)
     return PreparedRun(task, run, models, space, objective, [], summary)
 
@@ -108,6 +114,9 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
     run, space, task = prepared.run, prepared.space, prepared.task
     previous_seconds = float(prepared.summary.get("wall_seconds", 0.0))
     initial_robustness = prepared.summary["initial_robustness"]
+    initial_components = prepared.summary.get("initial_components")
+    # The unoptimised skill, executed before the trials: what method `stl` starts from.
+    baseline = Trial(0, "initial", space.initial, initial_robustness, components=initial_components)
     start = time.perf_counter()
     best = best_trial(prepared.history)
 
@@ -120,19 +129,21 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
             best = trial
             run.write_best_models(space.apply(prepared.models, trial.x))
         history.append(trial)
-        run.write_summary(_summary(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start))
+        run.write_summary(_summary(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components))
         on_trial(trial, best)
 
     history = list(prepared.history)
     if best is not None and not run.has_best_models():
         run.write_best_models(space.apply(prepared.models, best.x))
-    run_trials(prepared.objective, space.bounds, task.optimizer, prepared.history, record)
-    summary = _summary(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start)
+    run_trials(prepared.objective, space.bounds, task.optimizer, prepared.history, record, prepared.objective.parts, baseline)
+    summary = _summary(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components)
     run.write_summary(summary)
     return summary
 
 
-def _summary(task: Task, space: SearchSpace, initial_robustness: float, history: list[Trial], wall_seconds: float) -> dict[str, Any]:
+def _summary(
+    task: Task, space: SearchSpace, initial_robustness: float, history: list[Trial], wall_seconds: float, initial_components: dict[str, float] | None = None
+) -> dict[str, Any]:
     best = best_trial(history)
     satisfied = [trial.trial for trial in history if trial.satisfied]
     return {
@@ -146,6 +157,7 @@ def _summary(task: Task, space: SearchSpace, initial_robustness: float, history:
         "initial_trials": task.optimizer.initial,
         "budget": task.optimizer.trials,
         "initial_robustness": initial_robustness,
+        "initial_components": initial_components,
         "best_robustness": best.robustness if best else None,
         "best_trial": best.trial if best else None,
         "satisfied": bool(best and best.satisfied),

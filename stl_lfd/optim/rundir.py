@@ -171,6 +171,7 @@ def _trial_to_json(trial: Trial) -> dict[str, Any]:
         "optimizer_seconds": round(trial.optimizer_seconds, 4),
         "rollout_seconds": round(trial.rollout_seconds, 4),
         "parameters": trial.parameters,
+        "components": trial.components,
         "x": [float(value) for value in trial.x],
     }
 
@@ -186,6 +187,7 @@ def _trial_from_json(data: dict[str, Any]) -> Trial:
         optimizer_seconds=float(data.get("optimizer_seconds", 0.0)),
         rollout_seconds=float(data.get("rollout_seconds", 0.0)),
         parameters=dict(data.get("parameters", {})),
+        components=None if data.get("components") is None else {str(k): float(v) for k, v in data["components"].items()},
     )
 
 

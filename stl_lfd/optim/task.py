@@ -14,7 +14,7 @@ from typing import Any
 from stl_lfd.errors import ConfigError
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml
 
-METHODS = ("pi", "logei", "random")
+METHODS = ("stl", "pi", "logei", "random")
 SINGLE_SKILL = "skill"  # the name of the one skill of a task without a behaviour
 TRANSITIONS = ("none", "band", "full")
 SEMANTICS = ("new", "classic")

@@ -1,5 +1,7 @@
-"""STL specifications: parsing (`parse`, `load_spec`) and robustness (`compile_spec`)."""
+"""STL specifications: parsing (`parse`, `load_spec`) and robustness (`compile_spec`), and the parts of
+a conjunction (`split_spec`)."""
 
+from stl_lfd.stl.components import SpecParts, split_spec
 from stl_lfd.stl.parser import load_spec, parse, resolve
 from stl_lfd.stl.printer import format_formula, format_spec
 from stl_lfd.stl.robustness import SEMANTICS, HorizonWarning, Robustness, Semantics, compile_spec, horizon
@@ -16,4 +18,6 @@ __all__ = [
     "load_spec",
     "parse",
     "resolve",
+    "split_spec",
+    "SpecParts",
 ]

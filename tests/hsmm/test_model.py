@@ -50,6 +50,66 @@ def test_state_sequence_switches_at_cumulative_duration_means():
     assert list(switches) == list(expected)
 
 
+def six_state_band_model() -> HSMM:
+    model = HSMM(n_states=6)
+    model.means_ = np.arange(12, dtype=float).reshape(6, 2) * 0.05
+    model.covars_ = np.array([np.eye(2) * 1e-4] * 6)
+    model.duration_means_ = np.array([2.0, 4.7, 3.0, 1.5, 7.0, 4.0])
+    model.duration_stds_ = np.array([0.35, 0.7, 0.3, 0.5, 0.7, 0.4])
+    model.transmat_ = np.eye(6, k=1)
+    model.startprob_ = np.eye(6)[0]
+    model.sample_period_ = PERIOD
+    model.signal_names_ = ["x", "y"]
+    return model
+
+
+def assert_is_a_path(model: HSMM, states: np.ndarray) -> None:
+    transmat = model.normalized_transmat()
+    assert model.startprob_[states[0]] > 0
+    switches = np.flatnonzero(np.diff(states)) + 1
+    for step in switches:
+        assert transmat[states[step - 1], states[step]] > 0, (states[step - 1], states[step])
+    visited = [states[0]] + [states[step] for step in switches]
+    assert visited == model.nominal_path()
+
+
+def test_state_sequence_is_a_path_when_a_state_branches():
+    # Row 3 splits 0.45 / 0.55 between states 4 and 5: the occupancy's argmax went
+    # 1 -> 2 -> 3 -> 4 -> 6 (4 -> 6 has probability 0); the sequence follows 3 -> 5 -> 6.
+    model = six_state_band_model()
+    model.transmat_[2] = [0, 0, 0, 0.45, 0.55, 0]
+    steps = int(25 / PERIOD)
+    states = model.state_sequence(steps)
+    assert_is_a_path(model, states)
+    assert model.nominal_path() == [0, 1, 2, 4, 5]
+    # The last state starts after the duration means of the states before it.
+    start_of_last = np.flatnonzero(states == 5)[0] * PERIOD
+    assert start_of_last == pytest.approx(model.expected_duration() - model.duration_means_[5], abs=PERIOD)
+
+
+@pytest.mark.parametrize("tilt", [0.0, 1e-12, -1e-12, 1e-6, -1e-6])
+def test_near_ties_give_a_path_consistent_with_the_expected_duration(tilt):
+    model = six_state_band_model()
+    model.transmat_[1] = [0, 0, 0.5 + tilt, 0.5 - tilt, 0, 0]
+    states = model.state_sequence(int(25 / PERIOD))
+    assert_is_a_path(model, states)
+    expected_successor = 3 if tilt < 0 else 2  # an exact tie goes to the lower state number
+    assert model.nominal_path()[2] == expected_successor
+    last = model.nominal_path()[-1]
+    start_of_last = np.flatnonzero(states == last)[0] * PERIOD
+    assert start_of_last == pytest.approx(model.expected_duration() - model.duration_means_[last], abs=PERIOD)
+
+
+def test_random_transition_matrices_always_give_paths():
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        model = six_state_band_model()
+        model.transmat_ = rng.random((6, 6)) * (rng.random((6, 6)) < 0.5)
+        np.fill_diagonal(model.transmat_, 0.0)
+        model.duration_means_ = rng.uniform(0.001, 3.0, 6)  # some shorter than a step
+        assert_is_a_path(model, model.state_sequence(int(12 / PERIOD)))
+
+
 def test_no_probability_mass_leaks():
     model = known_model(duration_std=0.2)
     pmf = duration_pmf(model.duration_means_ / PERIOD, model.duration_stds_ / PERIOD, 200)

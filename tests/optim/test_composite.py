@@ -1,0 +1,91 @@
+"""Method `stl`: composition in torch, the trust region, and the loop on a conjunction."""
+
+import numpy as np
+import pytest
+import torch
+
+from stl_lfd.optim.composite import TrustRegion, compose, trust_region_length
+from stl_lfd.optim.loop import Outcome, Trial, best_trial, next_point, part_observations, run_trials
+from stl_lfd.optim.task import Optimizer
+from stl_lfd.stl import Semantics, parse, split_spec
+
+BOUNDS = np.array([[0.0, 0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 1.0]])
+# Two parts that want different coordinates; only a small box satisfies both.
+PARTS = split_spec(parse("a > 0 & b > 0"), "new")
+
+
+def conjunction_objective(x):
+    values = np.array([0.15 - np.abs(x[0] - 0.8) - 0.3 * np.abs(x[2] - 0.3), 0.15 - np.abs(x[1] - 0.2) - 0.3 * np.abs(x[3] - 0.6)])
+    return Outcome(PARTS.compose(values), components=dict(zip(PARTS.names, values.tolist())))
+
+
+def run(optimizer, history=(), baseline=None):
+    return run_trials(conjunction_objective, BOUNDS, optimizer, list(history), lambda trial, payload: None, PARTS, baseline)
+
+
+@pytest.mark.parametrize("semantics", [Semantics("classic"), Semantics("new", 1.0), Semantics("new", 7.0)])
+def test_torch_composition_matches_the_stl_engine(semantics):
+    rng = np.random.default_rng(0)
+    values = rng.normal(0, 0.1, size=(200, 4))
+    values[:20, 0] = 0.0  # a part exactly on the boundary
+    values[20:40] = np.abs(values[20:40])  # all satisfied
+    parts = split_spec(parse("a > 0 & b > 0 & c > 0 & d > 0"), semantics)
+    expected = parts.compose(values)
+    actual = compose(torch.as_tensor(values), semantics).numpy()
+    np.testing.assert_allclose(actual, expected, rtol=1e-12, atol=1e-15)
+
+
+def test_torch_composition_has_finite_gradients_near_zero():
+    values = torch.tensor([[1e-9, 0.3, 2.0], [-1e-9, 0.3, 2.0], [0.0, 0.3, 2.0]], dtype=torch.float64, requires_grad=True)
+    compose(values, Semantics("new", 1.0)).sum().backward()
+    assert torch.all(torch.isfinite(values.grad))
+
+
+def test_the_trust_region_grows_on_successes_and_shrinks_on_failures():
+    region = TrustRegion()
+    design = [0.0, -1.0]
+    assert trust_region_length(np.array(design), 2) == region.initial
+    assert trust_region_length(np.array(design + [0.5, 1.0]), 2) == pytest.approx(min(2 * region.initial, region.maximum))
+    assert trust_region_length(np.array(design + [-2.0] * 3), 2) == pytest.approx(region.initial / 2)
+    # Shrinking below the minimum starts again.
+    assert trust_region_length(np.array(design + [-2.0] * 3 * 20), 2) == pytest.approx(region.initial)
+
+
+def test_parts_of_failed_trials_enter_at_their_worst():
+    history = [
+        Trial(1, "sobol", np.zeros(4), -0.1, components={"a > 0": -0.1, "b > 0": 0.5}),
+        Trial(2, "sobol", np.zeros(4), None, status="failed"),
+        Trial(3, "sobol", np.zeros(4), -0.3, components={"a > 0": 0.2, "b > 0": -0.3}),
+    ]
+    np.testing.assert_array_equal(part_observations(history, PARTS.names), [[-0.1, 0.5], [-0.1, -0.3], [0.2, -0.3]])
+    history[0].components = None  # recorded by a version that did not keep the parts
+    assert part_observations(history, PARTS.names) is None
+
+
+def test_stl_method_is_reproducible_and_resumes_exactly():
+    optimizer = Optimizer("stl", initial=4, trials=8, seed=2)
+    first = run(optimizer)
+    assert [trial.phase for trial in first] == ["sobol"] * 4 + ["stl"] * 4
+    assert np.array_equal([t.x for t in first], [t.x for t in run(optimizer)])
+    resumed = run(optimizer, run(Optimizer("stl", initial=4, trials=6, seed=2)))
+    assert np.array_equal([t.x for t in resumed], [t.x for t in first])
+    assert all(np.all((t.x >= BOUNDS[0]) & (t.x <= BOUNDS[1])) for t in first)
+
+
+def test_stl_method_satisfies_a_conjunction_that_random_search_does_not():
+    found = [best_trial(run(Optimizer("stl", initial=5, trials=20, seed=seed))).robustness for seed in range(2)]
+    random = [best_trial(run(Optimizer("random", initial=5, trials=20, seed=seed))).robustness for seed in range(2)]
+    assert min(found) > 0
+    assert max(random) < min(found)
+
+
+def test_the_baseline_is_learned_from_but_not_recorded():
+    baseline_x = np.array([0.8, 0.2, 0.3, 0.6])  # the optimum: the trust region starts around it
+    outcome = conjunction_objective(baseline_x)
+    baseline = Trial(0, "initial", baseline_x, outcome.robustness, components=outcome.components)
+    optimizer = Optimizer("stl", initial=3, trials=3, seed=0)
+    history = run(optimizer)
+    with_baseline, _ = next_point(history, BOUNDS, optimizer, PARTS, baseline)
+    without, _ = next_point(history, BOUNDS, optimizer, PARTS)
+    assert np.linalg.norm(with_baseline - baseline_x) < np.linalg.norm(without - baseline_x)
+    assert np.all(np.abs(with_baseline - baseline_x) <= TrustRegion().initial / 2 + 1e-9)
