@@ -8,7 +8,7 @@ stop is 8 mm off the hole's centre in x (the paper's shift between end effector 
 so the learned insertion pushes the shaft onto the holder's edge.
 
 Both: minimum-jerk segments, varying timing and via points, 0.5 mm sensor noise, 100 Hz.
-Run from the repository root: python demos/make_pick_insert.py [--count 5] [--seed 11]
+Run from the repository root: python demos/make_pick_insert.py [--count 5] [--seed 11] [--shift-mm 8]
 """
 
 from __future__ import annotations
@@ -71,12 +71,12 @@ def pick(rng: np.random.Generator, index: int) -> SignalTable:
     return demonstration(rng, phases, hold_end=3.0)
 
 
-def insert(rng: np.random.Generator, index: int) -> SignalTable:
+def insert(rng: np.random.Generator, index: int, shift: np.ndarray = INSERTION_SHIFT) -> SignalTable:
     def near(point, spread):
         return np.asarray(point) + rng.normal(0, spread, size=3) * np.array([1, 1, 0.3])
 
     lifted = GRASP + np.array([0.0, 0.0, 0.14])
-    stop = HOLE + INSERTION_SHIFT + np.array(STOP_SPREAD_MM[index % len(STOP_SPREAD_MM)]) / 1000
+    stop = HOLE + shift + np.array(STOP_SPREAD_MM[index % len(STOP_SPREAD_MM)]) / 1000
     hover = near(stop + np.array([0, 0, 0.19]), 0.002)
     phases = [
         (GRASP, 0.0, 0.0),
@@ -95,9 +95,11 @@ def main() -> None:
     parser.add_argument("--count", type=int, default=5)
     parser.add_argument("--seed", type=int, default=11)
     parser.add_argument("--out", type=Path, default=ROOT / "demos")
+    parser.add_argument("--shift-mm", type=float, default=INSERTION_SHIFT[0] * 1000, help="demonstrated insertion offset from the hole in x")
     args = parser.parse_args()
     rng = np.random.default_rng(args.seed)
-    for name, make in (("pick", pick), ("insert", insert)):
+    shift = np.array([args.shift_mm / 1000, 0.0, 0.0])
+    for name, make in (("pick", pick), ("insert", lambda rng, index: insert(rng, index, shift))):
         folder = args.out / name
         folder.mkdir(parents=True, exist_ok=True)
         for old in folder.glob("demo_*.csv"):

@@ -274,9 +274,11 @@ def optimize(
 ) -> None:
     """Optimise a skill so that its execution satisfies the task's STL specification.
 
-    Runs the paper's Algorithm 1: M scrambled-Sobol trials, then probability of improvement on
-    a Gaussian process of the robustness, until N trials. Each trial is recorded in the run
-    directory as it finishes; the final summary.json is printed on stdout.
+    M scrambled-Sobol trials, then the task's method until N trials: stl models each top-level
+    part of the spec with its own GP and maximises expected improvement of their composition in
+    a trust region; pi is the paper's Algorithm 1 (probability of improvement on one GP of the
+    robustness). Each trial is recorded in the run directory as it finishes; the final
+    summary.json is printed on stdout.
 
     Examples:
 

@@ -122,10 +122,11 @@ def composed_log_ei(model, best: float, scale: float, semantics: Semantics, part
     The parts' GPs are independent, so at one point their joint posterior is `m` independent
     normals: `MC_SAMPLES` fixed scrambled-Sobol normal draws (`S x m`) are scaled by each
     point's posterior means and standard deviations, composed, and the improvement averaged.
-    This is `qLogExpectedImprovement` with a `GenericMCObjective` for q = 1, without the joint
-    posterior and its Cholesky factor (5x faster here). As in LogEI, the improvement's ReLU is
-    smoothed (softplus with temperature `0.01 scale`) and averaged in log space, so that the
-    acquisition keeps a gradient far from improvement.
+    This is `qLogExpectedImprovement` with a `GenericMCObjective` for q = 1, computed from
+    `PartsPosterior` instead of the joint posterior and its Cholesky factor (about 10x faster
+    here). As in LogEI, the improvement's ReLU is smoothed (softplus with temperature
+    `0.01 scale`) and averaged in log space, so that the acquisition keeps a gradient far from
+    improvement.
     """
     import math
 
@@ -136,18 +137,60 @@ def composed_log_ei(model, best: float, scale: float, semantics: Semantics, part
     unit = SobolEngine(parts, scramble=True, seed=seed).draw(MC_SAMPLES, dtype=torch.float64)
     normal = torch.distributions.Normal(0.0, 1.0).icdf(unit.clamp(1e-6, 1 - 1e-6))  # S x m
     temperature = 0.01 * scale
+    posterior = PartsPosterior(model)
 
     class ComposedLogEI(AcquisitionFunction):
         def forward(self, X):  # b x 1 x d -> b
-            posterior = self.model.posterior(X)
-            mean = posterior.mean.squeeze(-2)  # b x m
-            std = posterior.variance.clamp_min(1e-18).sqrt().squeeze(-2)
+            mean, std = posterior(X[..., 0, :])  # b x m each
             samples = mean.unsqueeze(-2) + std.unsqueeze(-2) * normal  # b x S x m
             improvement = (compose(samples, semantics) - best) / temperature  # b x S
             log_softplus = torch.where(improvement < -30, improvement, torch.nn.functional.softplus(improvement).clamp_min(1e-300).log())
             return torch.logsumexp(log_softplus, dim=-1) - math.log(MC_SAMPLES) + math.log(temperature)
 
     return ComposedLogEI(model)
+
+
+class PartsPosterior:
+    """Posterior means and standard deviations of a fitted multi-output `SingleTaskGP` (RBF
+    kernel, constant mean, one noise level per output, standardised outputs), computed
+    directly from its hyperparameters: `b x d` points -> two `b x m` tensors, in the outputs'
+    units. Equal to `model.posterior(X)` (tested) at a fraction of its cost."""
+
+    def __init__(self, model) -> None:
+        import torch
+
+        with torch.no_grad():
+            inputs = model.train_inputs[0]  # m x n x d
+            self.lengthscale = model.covar_module.lengthscale.detach()  # m x 1 x d
+            self.inputs = inputs / self.lengthscale
+            kernel = self._kernel(self.inputs, self.inputs)
+            noise = model.likelihood.noise.detach()  # m x 1
+            kernel = kernel + noise[..., None] * torch.eye(inputs.shape[-2], dtype=inputs.dtype)
+            self.cholesky = torch.linalg.cholesky(kernel)  # m x n x n
+            constant = model.mean_module.constant.detach()  # m
+            residual = (model.train_targets - constant[:, None]).unsqueeze(-1)  # m x n x 1
+            self.weights = torch.cholesky_solve(residual, self.cholesky)  # m x n x 1
+            self.constant = constant
+            self.y_mean = model.outcome_transform.means.detach()[0]  # m
+            self.y_std = model.outcome_transform.stdvs.detach()[0]  # m
+
+    @staticmethod
+    def _kernel(a, b):
+        import torch
+
+        # squared distances expanded (not cdist, whose gradient is NaN at a training point)
+        squared = a.square().sum(-1, keepdim=True) - 2 * a @ b.transpose(-1, -2) + b.square().sum(-1).unsqueeze(-2)
+        return torch.exp(-0.5 * squared.clamp_min(0.0))
+
+    def __call__(self, X):
+        import torch
+
+        scaled = X.unsqueeze(0) / self.lengthscale  # m x b x d
+        cross = self._kernel(scaled, self.inputs)  # m x b x n
+        mean = self.constant[:, None] + (cross @ self.weights)[..., 0]  # m x b
+        solved = torch.linalg.solve_triangular(self.cholesky, cross.transpose(-1, -2), upper=False)  # m x n x b
+        variance = (1.0 - solved.square().sum(dim=-2)).clamp_min(1e-12)  # m x b
+        return (mean * self.y_std[:, None] + self.y_mean[:, None]).T, (variance.sqrt() * self.y_std[:, None]).T
 
 
 def _trust_box(center: np.ndarray, length: float) -> np.ndarray:

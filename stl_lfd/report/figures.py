@@ -85,6 +85,28 @@ def robustness_per_trial(run: RunData) -> Figure:
     return figure
 
 
+def component_robustness(run: RunData) -> Figure | None:
+    """Robustness of each top-level part of the spec per trial (which part binds, trial by
+    trial), with the spec's robustness they compose to; None for runs recorded without parts."""
+    trials = [trial for trial in run.trials if trial.components]
+    if not trials:
+        return None
+    names = list(trials[0].components)
+    figure = Figure(figsize=(7.5, 4), layout="constrained")
+    axes = figure.subplots()
+    numbers = np.array([trial.trial for trial in trials])
+    for index, name in enumerate(names):
+        values = np.array([trial.components.get(name, np.nan) for trial in trials], dtype=float)
+        axes.plot(numbers, values, marker="o", ms=3, lw=1, color=f"C{index}", label=name)
+    axes.plot(numbers, [trial.robustness for trial in trials], color="k", lw=2, label="spec (composed)")
+    binding = np.array([min(trial.components.values()) for trial in trials])
+    axes.scatter(numbers, binding, s=60, facecolors="none", edgecolors="k", zorder=3, label="binding part")
+    axes.axhline(0.0, color="k", lw=0.8, ls=":")
+    axes.set(xlabel="trial", ylabel=f"{run.task.semantics} robustness", title=f"{run.task.name}: robustness of each part of the spec")
+    axes.legend(loc="lower right", fontsize="small")
+    return figure
+
+
 def _robustness_curves(axes, run: RunData, label_prefix: str, color: str = "tab:blue") -> None:
     numbers = np.array([trial.trial for trial in run.trials])
     values = np.array([trial.robustness if trial.robustness is not None else np.nan for trial in run.trials])

@@ -145,3 +145,18 @@ def test_ctrl_c_keeps_the_finished_trials_and_says_how_to_resume(tmp_path, learn
     resumed = runner.invoke(app, ["optimize", str(task), "--out", str(out), "--resume"])
     assert resumed.exit_code == 0, resumed.stderr
     assert json.loads(resumed.stdout)["trials"] == 5
+
+
+@pytest.mark.parametrize("semantics", ["classic", "new"])
+def test_recorded_parts_compose_to_the_recorded_robustness_exactly(tmp_path, learned_model_file, semantics):
+    from stl_lfd.stl import load_spec, split_spec
+
+    task = load_task(small_task(tmp_path, learned_model_file, extra=f"semantics: {semantics}\n")).with_overrides(method="stl")
+    summary = optimise(start_run(task, tmp_path / "run"))
+    parts = split_spec(load_spec(ROOT / "specs" / "phi1.stl"), semantics)
+    trials = [json.loads(line) for line in (tmp_path / "run" / "trials.jsonl").read_text().splitlines()]
+    assert [trial["phase"] for trial in trials] == ["sobol"] * 3 + ["stl"] * 2
+    for trial in trials:
+        assert list(trial["components"]) == list(parts.names)
+        assert parts.compose(list(trial["components"].values())) == trial["robustness"]
+    assert parts.compose(list(summary["initial_components"].values())) == summary["initial_robustness"]

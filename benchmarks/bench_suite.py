@@ -1,0 +1,273 @@
+"""The optimiser suite: problems nobody shaped for the optimiser, solved by every method over
+many seeds.
+
+    python -m benchmarks.bench_suite [--problems P ...] [--methods M ...] [--seeds 10]
+                                     [--jobs 2] [--table] [--search N]
+
+Each problem is a task file in `benchmarks/problems/` (its budget is the file's `trials`).
+Methods: the tool's `stl`, `pi`, `logei` and `random`, run exactly as `stlopt optimize` runs
+them (the unoptimised skill executed first, then the trials), and Optuna's default TPE
+sampler driving the same objective (`pip install optuna`; it is a benchmark extra, not a
+dependency of the tool). Every finished run is one line of `benchmarks/results/suite.jsonl`;
+runs already there are not repeated, so the suite can be stopped and extended. `--table` only
+prints the table of what is recorded. `--search N` runs N uniform random points per problem
+(the large-budget check that a satisfying point exists) into `results/search.jsonl`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import os
+import statistics
+import time
+import warnings
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+ROOT = Path(__file__).resolve().parent.parent
+PROBLEMS_DIR = ROOT / "benchmarks" / "problems"
+RESULTS = ROOT / "benchmarks" / "results" / "suite.jsonl"
+SEARCH_RESULTS = ROOT / "benchmarks" / "results" / "search.jsonl"
+METHODS = ("stl", "pi", "logei", "random", "tpe")
+# Workers are spawned, not forked: forking after torch or pybullet started threads deadlocks.
+SPAWN = multiprocessing.get_context("spawn")
+TPE_STARTUP = 10  # Optuna's default n_startup_trials: random points before TPE proposes
+
+
+def problem_names() -> list[str]:
+    return sorted(path.stem for path in PROBLEMS_DIR.glob("*.yaml"))
+
+
+def task_file(problem: str) -> Path:
+    """A suite problem, or a bundled task (`configs/NAME.yaml`) by its name."""
+    path = PROBLEMS_DIR / f"{problem}.yaml"
+    return path if path.exists() else ROOT / "configs" / f"{problem}.yaml"
+
+
+def run_one(problem: str, method: str, seed: int) -> dict:
+    """One optimisation run; returns its record (per-trial robustness and timings)."""
+    warnings.simplefilter("ignore")
+    _one_thread()
+    from stl_lfd.optim import load_task
+
+    task = _with_learned_model(load_task(task_file(problem)), problem)
+    best_x = None
+    if method == "tpe":
+        trials, initial = _run_tpe(task, seed)
+    else:
+        trials, initial = _run_tool(task.with_overrides(method=method, seed=seed))
+    best_x = max((trial for trial in trials if trial["robustness"] is not None), key=lambda trial: trial["robustness"], default={}).get("x")
+    robustness = [trial["robustness"] for trial in trials]
+    satisfied = [trial["trial"] for trial in trials if trial["robustness"] is not None and trial["robustness"] > 0]
+    proposed = [trial["optimizer_seconds"] for trial in trials if trial["phase"] not in ("sobol", "startup")]
+    return {
+        "problem": problem,
+        "method": method,
+        "seed": seed,
+        "budget": task.optimizer.trials,
+        "backend": task.backend,
+        "initial_robustness": initial,
+        "first_satisfied": satisfied[0] if satisfied else None,
+        "best_robustness": max((value for value in robustness if value is not None), default=None),
+        "optimizer_seconds": statistics.median(proposed) if proposed else 0.0,
+        "rollout_seconds": statistics.median(trial["rollout_seconds"] for trial in trials),
+        "robustness": robustness,
+        "best_x": best_x,
+    }
+
+
+def _one_thread() -> None:
+    """Each worker on one core: with `--jobs` workers on as many cores, extra BLAS or torch
+    threads only fight each other (measured: proposals 5x slower)."""
+    import torch
+
+    torch.set_num_threads(1)
+
+
+def _with_learned_model(task, problem: str):
+    """The task with its demonstrations learned once (into `results/models/`) and loaded by
+    every run after that: learning is deterministic, so only time is saved."""
+    from dataclasses import replace
+
+    from stl_lfd.hsmm import learn_from_folder, save_model
+
+    if task.demos is None:
+        return task
+    path = RESULTS.parent / "models" / f"{problem}.npz"
+    if not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        partial = path.with_suffix(f".{multiprocessing.current_process().pid}.npz")
+        save_model(learn_from_folder(task.demos, task.states)[0], partial)
+        partial.replace(path)
+    return replace(task, model=path, demos=None)
+
+
+def _run_tool(task) -> tuple[list[dict], float]:
+    import tempfile
+
+    from stl_lfd.optim import optimise, start_run
+
+    with tempfile.TemporaryDirectory() as folder:
+        prepared = start_run(task, Path(folder) / "run")
+        optimise(prepared)
+        trials = [json.loads(line) for line in (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()]
+        return trials, prepared.summary["initial_robustness"]
+
+
+def _run_tpe(task, seed: int) -> tuple[list[dict], float]:
+    import optuna
+
+    from stl_lfd.optim.run import objective_for, task_models
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    models = task_models(task)
+    space, objective = objective_for(task, models)
+    initial = objective.evaluate(models).robustness
+    study = optuna.create_study(direction="maximize", sampler=optuna.samplers.TPESampler(seed=seed))
+    distributions = {name: optuna.distributions.FloatDistribution(low, high) for name, low, high in zip(space.names, space.lower, space.upper)}
+    trials = []
+    for number in range(1, task.optimizer.trials + 1):
+        start = time.perf_counter()
+        trial = study.ask(distributions)
+        x = np.array([trial.params[name] for name in space.names])
+        chosen = time.perf_counter()
+        try:
+            robustness = float(objective(x).robustness)
+            study.tell(trial, robustness)
+        except Exception:
+            robustness = None
+            study.tell(trial, state=optuna.trial.TrialState.FAIL)
+        trials.append(
+            {
+                "trial": number,
+                "phase": "startup" if number <= TPE_STARTUP else "tpe",
+                "robustness": robustness,
+                "optimizer_seconds": chosen - start,
+                "rollout_seconds": time.perf_counter() - chosen,
+            }
+        )
+    return trials, initial
+
+
+def random_search(problem: str, points: int, seed: int = 12345) -> dict:
+    """The best of `points` uniform random points: evidence that the problem can be solved."""
+    warnings.simplefilter("ignore")
+    from stl_lfd.optim import load_task
+    from stl_lfd.optim.run import objective_for, task_models
+
+    task = load_task(task_file(problem))
+    models = task_models(task)
+    space, objective = objective_for(task, models)
+    unit = np.random.default_rng(seed).random((points, space.dimension))
+    values = []
+    for row in unit:
+        try:
+            values.append(float(objective(space.lower + row * (space.upper - space.lower)).robustness))
+        except Exception:
+            continue
+    best = int(np.argmax(values))
+    return {
+        "problem": problem,
+        "points": points,
+        "best_robustness": values[best],
+        "best_unit_point": [round(float(v), 4) for v in unit[best]],
+        "satisfied_fraction": float(np.mean(np.array(values) > 0)),
+    }
+
+
+def _recorded(path: Path) -> list[dict]:
+    if not path.exists():
+        return []
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+def _append(path: Path, record: dict) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a") as stream:
+        stream.write(json.dumps(record) + "\n")
+
+
+def run_suite(problems: list[str], methods: list[str], seeds: list[int], jobs: int) -> None:
+    done = {(r["problem"], r["method"], r["seed"]) for r in _recorded(RESULTS)}
+    # seed by seed, so that a suite stopped early has whole seeds for every problem and method
+    todo = [(p, m, s) for s in seeds for p in problems for m in methods if (p, m, s) not in done]
+    console = Console(stderr=True)
+    console.print(f"{len(todo)} runs to do ({len(done)} recorded)")
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=SPAWN) as pool:
+        futures = {pool.submit(run_one, *job): job for job in todo}
+        for count, future in enumerate(as_completed(futures), start=1):
+            job = futures[future]
+            try:
+                record = future.result()
+            except Exception as error:  # one broken run must not lose the others
+                console.print(f"[red]{job} failed: {error}")
+                continue
+            _append(RESULTS, record)
+            console.print(f"{count}/{len(todo)} {job}: first satisfied {record['first_satisfied']}, best {record['best_robustness']:.4f}")
+
+
+def print_table(problems: list[str], methods: list[str], seeds: list[int] | None = None) -> None:
+    records = [r for r in _recorded(RESULTS) if r["problem"] in problems and r["method"] in methods and (seeds is None or r["seed"] in seeds)]
+    searches = {r["problem"]: r for r in _recorded(SEARCH_RESULTS)}
+    table = Table(title="Optimiser suite: success within the budget, over seeds")
+    for column in ("problem", "budget", "search best", "method", "satisfied", "median first", "median best", "optimiser s/trial", "rollout s/trial"):
+        table.add_column(column)
+    totals: dict[str, list[int]] = {method: [0, 0] for method in methods}
+    for problem in problems:
+        search = searches.get(problem)
+        for method in methods:
+            runs = [r for r in records if r["problem"] == problem and r["method"] == method]
+            if not runs:
+                continue
+            firsts = [r["first_satisfied"] for r in runs if r["first_satisfied"] is not None]
+            totals[method][0] += len(firsts)
+            totals[method][1] += len(runs)
+            table.add_row(
+                problem,
+                str(runs[0]["budget"]),
+                f"{search['best_robustness']:+.4f} ({search['points']})" if search else "",
+                method,
+                f"{len(firsts)}/{len(runs)}",
+                f"{statistics.median(firsts):g}" if firsts else "-",
+                f"{statistics.median(r['best_robustness'] for r in runs):+.4f}",
+                f"{statistics.median(r['optimizer_seconds'] for r in runs):.2f}",
+                f"{statistics.median(r['rollout_seconds'] for r in runs):.2f}",
+            )
+        table.add_section()
+    for method, (satisfied, total) in totals.items():
+        if total:
+            table.add_row("all", "", "", method, f"{satisfied}/{total} ({100 * satisfied / total:.0f} %)", "", "", "", "")
+    Console().print(table)
+
+
+def main(argv: list[str] | None = None) -> None:
+    for variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(variable, "1")  # inherited by the spawned workers
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--problems", nargs="+", default=problem_names())
+    parser.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS)
+    parser.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1")
+    parser.add_argument("--first-seed", type=int, default=0)
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--table", action="store_true", help="only print the table of recorded runs")
+    parser.add_argument("--search", type=int, default=0, help="random points per problem for the existence check")
+    args = parser.parse_args(argv)
+    seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+    if args.search:
+        with ProcessPoolExecutor(max_workers=args.jobs, mp_context=SPAWN) as pool:
+            for record in pool.map(random_search, args.problems, [args.search] * len(args.problems)):
+                _append(SEARCH_RESULTS, record)
+                Console(stderr=True).print(record)
+    elif not args.table:
+        run_suite(args.problems, args.methods, seeds, args.jobs)
+    print_table(args.problems, args.methods, seeds)
+
+
+if __name__ == "__main__":
+    main()
