@@ -212,13 +212,11 @@ def run_suite(problems: list[str], methods: list[str], seeds: list[int], jobs: i
             console.print(f"{count}/{len(todo)} {job}: first satisfied {record['first_satisfied']}, best {record['best_robustness']:.4f}")
 
 
-def print_table(problems: list[str], methods: list[str], seeds: list[int] | None = None) -> None:
+def summarise(problems: list[str], methods: list[str], seeds: list[int] | None = None) -> list[dict]:
+    """One row per (problem, method) of the recorded runs, then one `all` row per method."""
     records = [r for r in _recorded(RESULTS) if r["problem"] in problems and r["method"] in methods and (seeds is None or r["seed"] in seeds)]
     searches = {r["problem"]: r for r in _recorded(SEARCH_RESULTS)}
-    table = Table(title="Optimiser suite: success within the budget, over seeds")
-    for column in ("problem", "budget", "search best", "method", "satisfied", "median first", "median best", "optimiser s/trial", "rollout s/trial"):
-        table.add_column(column)
-    totals: dict[str, list[int]] = {method: [0, 0] for method in methods}
+    rows, totals = [], {method: [0, 0] for method in methods}
     for problem in problems:
         search = searches.get(problem)
         for method in methods:
@@ -228,21 +226,41 @@ def print_table(problems: list[str], methods: list[str], seeds: list[int] | None
             firsts = [r["first_satisfied"] for r in runs if r["first_satisfied"] is not None]
             totals[method][0] += len(firsts)
             totals[method][1] += len(runs)
-            table.add_row(
-                problem,
-                str(runs[0]["budget"]),
-                f"{search['best_robustness']:+.4f} ({search['points']})" if search else "",
-                method,
-                f"{len(firsts)}/{len(runs)}",
-                f"{statistics.median(firsts):g}" if firsts else "-",
-                f"{statistics.median(r['best_robustness'] for r in runs):+.4f}",
-                f"{statistics.median(r['optimizer_seconds'] for r in runs):.2f}",
-                f"{statistics.median(r['rollout_seconds'] for r in runs):.2f}",
+            rows.append(
+                {
+                    "problem": problem,
+                    "budget": str(runs[0]["budget"]),
+                    "search best": f"{search['best_robustness']:+.4f} ({search['satisfied_fraction']:.1%} of {search['points']})" if search else "",
+                    "method": method,
+                    "satisfied": f"{len(firsts)}/{len(runs)}",
+                    "median first": f"{statistics.median(firsts):g}" if firsts else "-",
+                    "median best": f"{statistics.median(r['best_robustness'] for r in runs):+.4f}",
+                    "optimiser s/trial": f"{statistics.median(r['optimizer_seconds'] for r in runs):.2f}",
+                    "rollout s/trial": f"{statistics.median(r['rollout_seconds'] for r in runs):.2f}",
+                }
             )
-        table.add_section()
     for method, (satisfied, total) in totals.items():
         if total:
-            table.add_row("all", "", "", method, f"{satisfied}/{total} ({100 * satisfied / total:.0f} %)", "", "", "", "")
+            rows.append({"problem": "all", "method": method, "satisfied": f"{satisfied}/{total} ({100 * satisfied / total:.0f} %)"})
+    return rows
+
+
+COLUMNS = ("problem", "budget", "search best", "method", "satisfied", "median first", "median best", "optimiser s/trial", "rollout s/trial")
+
+
+def print_table(problems: list[str], methods: list[str], seeds: list[int] | None = None, markdown: bool = False) -> None:
+    rows = summarise(problems, methods, seeds)
+    if markdown:
+        print("| " + " | ".join(COLUMNS) + " |")
+        print("|" + "---|" * len(COLUMNS))
+        for row in rows:
+            print("| " + " | ".join(row.get(column, "") for column in COLUMNS) + " |")
+        return
+    table = Table(title="Optimiser suite: success within the budget, over seeds")
+    for column in COLUMNS:
+        table.add_column(column)
+    for row in rows:
+        table.add_row(*(row.get(column, "") for column in COLUMNS))
     Console().print(table)
 
 
@@ -257,6 +275,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--table", action="store_true", help="only print the table of recorded runs")
     parser.add_argument("--search", type=int, default=0, help="random points per problem for the existence check")
+    parser.add_argument("--markdown", action="store_true", help="print the table in Markdown")
     args = parser.parse_args(argv)
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     if args.search:
@@ -266,7 +285,7 @@ def main(argv: list[str] | None = None) -> None:
                 Console(stderr=True).print(record)
     elif not args.table:
         run_suite(args.problems, args.methods, seeds, args.jobs)
-    print_table(args.problems, args.methods, seeds)
+    print_table(args.problems, args.methods, seeds, args.markdown)
 
 
 if __name__ == "__main__":

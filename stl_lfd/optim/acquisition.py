@@ -21,8 +21,8 @@ RAW_SAMPLES = 256
 FIT_ITERATIONS = 100
 # L-BFGS-B iterations of each acquisition restart. BoTorch's default (200) spent 2-3 s per
 # PI proposal on phi2-shaped problems alone (8-15 s beside another run; flat log-PI, ~750
-# evaluations); with 60 the maximum
-# found was within 3.5 % of its PI (checked on a phi2 history) in half the time.
+# evaluations); with 60 the maximum found was within 3.5 % of its PI (checked on a phi2
+# history) in half the time.
 ACQUISITION_ITERATIONS = 60
 # SINGLE_THREAD: these matrices are tiny (n <= a few hundred), so one thread is as fast as two,
 # and it avoids OpenMP threads spinning against the simulator or a parallel run on 2 cores

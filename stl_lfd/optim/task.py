@@ -49,9 +49,10 @@ class Parameters:
 
 @dataclass(frozen=True)
 class Optimizer:
-    """Algorithm 1's budget: `initial` (M) Sobol trials, then `method` until `trials` (N)."""
+    """Algorithm 1's budget: `initial` (M) Sobol trials, then `method` until `trials` (N).
+    `stl` (composite BO on the spec's parts) is the default; `pi` is the paper's algorithm."""
 
-    method: str = "pi"
+    method: str = "stl"
     initial: int = 8
     trials: int = 32
     seed: int = 0

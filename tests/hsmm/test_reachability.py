@@ -4,8 +4,9 @@ standard deviation (plus, for phi2, the reduced transition band) satisfies phi1 
 while the learned skill violates both.
 
 The points below are positions inside the bounds of `configs/phi1.yaml` and `configs/phi2.yaml`
-(0 = lower bound, 1 = upper bound, per parameter), found by `stlopt optimize` on the kinematic
-backend. These tests pin that such points exist and stay valid as the model code changes.
+(0 = lower bound, 1 = upper bound, per parameter), found by `stlopt optimize` (method stl; phi1
+on the kinematic backend, phi2 with PyBullet). These tests pin that such points exist and stay
+valid as the model code changes.
 """
 
 import numpy as np
@@ -17,10 +18,10 @@ from stl_lfd.stl import compile_spec, load_spec
 from tests.conftest import ROOT
 
 POINTS = {
-    "phi1": [0.005, 0.8484, 0.7445, 0.9914, 0.5767, 0.1848, 0.4697, 0.718, 0.2223, 0.4764, 0.2989, 0.6976],
+    "phi1": [0.3523, 0.1106, 0.5819, 1.0, 0.6072, 0.0955, 0.8, 1.0, 0.202, 0.5576, 0.0, 0.4233],
     "phi2": [
-        0.1386, 1.0, 0.6538, 1.0, 0.6111, 0.1362, 0.3278, 1.0, 0.0, 0.0016, 0.0,
-        0.4588, 0.7641, 0.2479, 0.037, 0.0, 0.3746, 0.487, 0.1172, 0.6345, 0.2646,
+        0.714, 0.3959, 0.4177, 0.5545, 0.0949, 0.8323, 0.9213, 0.9611, 0.8278, 0.8526, 0.5979,
+        0.5906, 1.0, 0.6694, 0.4909, 0.0889, 0.3643, 0.3993, 0.3053, 0.213, 0.6598,
     ],
 }
 
