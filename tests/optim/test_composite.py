@@ -89,3 +89,15 @@ def test_the_baseline_is_learned_from_but_not_recorded():
     without, _ = next_point(history, BOUNDS, optimizer, PARTS)
     assert np.linalg.norm(with_baseline - baseline_x) < np.linalg.norm(without - baseline_x)
     assert np.all(np.abs(with_baseline - baseline_x) <= TrustRegion().initial / 2 + 1e-9)
+
+
+def test_a_spec_that_is_not_a_conjunction_runs_through_the_same_path():
+    single = split_spec(parse("F a > 0"), "new")
+
+    def objective(x):
+        value = 0.1 - float(np.linalg.norm(x - 0.7))
+        return Outcome(value, components={single.names[0]: value})
+
+    history = run_trials(objective, BOUNDS, Optimizer("stl", initial=4, trials=9, seed=0), [], lambda trial, payload: None, single)
+    assert [trial.phase for trial in history] == ["sobol"] * 4 + ["stl"] * 5
+    assert best_trial(history).robustness > max(trial.robustness for trial in history[:4])

@@ -11,7 +11,7 @@ from stl_lfd.signals import read_signal_csv, write_signal_csv
 from tests.conftest import ROOT
 
 runner = CliRunner()
-FIGURES = ["trajectories", "region_distances", "robustness", "gp_slices", "transitions", "durations"]
+FIGURES = ["trajectories", "region_distances", "robustness", "components", "gp_slices", "transitions", "durations"]
 
 
 @pytest.fixture(scope="module")
