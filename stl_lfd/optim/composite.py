@@ -160,15 +160,16 @@ class PartsPosterior:
         import torch
 
         with torch.no_grad():
-            inputs = model.train_inputs[0]  # m x n x d
-            self.lengthscale = model.covar_module.lengthscale.detach()  # m x 1 x d
+            outputs = model.num_outputs  # a one-output model has no batch dimension: add it
+            inputs = model.train_inputs[0].reshape(outputs, -1, model.train_inputs[0].shape[-1])  # m x n x d
+            self.lengthscale = model.covar_module.lengthscale.detach().reshape(outputs, 1, -1)  # m x 1 x d
             self.inputs = inputs / self.lengthscale
             kernel = self._kernel(self.inputs, self.inputs)
-            noise = model.likelihood.noise.detach()  # m x 1
+            noise = model.likelihood.noise.detach().reshape(outputs, 1)
             kernel = kernel + noise[..., None] * torch.eye(inputs.shape[-2], dtype=inputs.dtype)
             self.cholesky = torch.linalg.cholesky(kernel)  # m x n x n
-            constant = model.mean_module.constant.detach()  # m
-            residual = (model.train_targets - constant[:, None]).unsqueeze(-1)  # m x n x 1
+            constant = model.mean_module.constant.detach().reshape(outputs)
+            residual = (model.train_targets.reshape(outputs, -1) - constant[:, None]).unsqueeze(-1)  # m x n x 1
             self.weights = torch.cholesky_solve(residual, self.cholesky)  # m x n x 1
             self.constant = constant
             self.y_mean = model.outcome_transform.means.detach()[0]  # m

@@ -98,6 +98,6 @@ def test_a_spec_that_is_not_a_conjunction_runs_through_the_same_path():
         value = 0.1 - float(np.linalg.norm(x - 0.7))
         return Outcome(value, components={single.names[0]: value})
 
-    history = run_trials(objective, BOUNDS, Optimizer("stl", initial=4, trials=9, seed=0), [], lambda trial, payload: None, single)
-    assert [trial.phase for trial in history] == ["sobol"] * 4 + ["stl"] * 5
+    history = run_trials(objective, BOUNDS, Optimizer("stl", initial=4, trials=12, seed=0), [], lambda trial, payload: None, single)
+    assert [trial.phase for trial in history] == ["sobol"] * 4 + ["stl"] * 8
     assert best_trial(history).robustness > max(trial.robustness for trial in history[:4])
