@@ -67,45 +67,31 @@ class Outcome:
     components: dict[str, float] | None = None
 
 
-def next_point(
-    history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None = None, baseline: Trial | None = None
-) -> tuple[np.ndarray, str]:
-    """The point of trial `len(history) + 1` and the phase that chose it.
-
-    Method `stl` models each of `parts` (the spec's top-level conjuncts) and also learns from
-    `baseline`, the unoptimised skill executed before the trials (when its parts are known);
-    the other methods are the paper's algorithm and its baselines, and see the trials alone.
-    """
+def next_point(history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None = None) -> tuple[np.ndarray, str]:
+    """The point of trial `len(history) + 1` and the phase that chose it; method `stl` models
+    each of `parts`, the spec's top-level conjuncts."""
     index = len(history)
     if index < optimizer.initial:
         return sobol_points(bounds, optimizer.initial, optimizer.seed)[index], "sobol"
     if optimizer.method == "random":
         return random_point(bounds, optimizer.seed, index), "random"
-    if optimizer.method == "stl":
-        return _composite_point(history, bounds, optimizer, parts, baseline), "stl"
     X, Y = observations(history)
     if len(Y) == 0:  # every trial so far failed: nothing to model yet
         return random_point(bounds, optimizer.seed, index), "random"
+    if optimizer.method == "stl":
+        return _composite_point(history, X, Y, bounds, optimizer, parts), "stl"
     return propose(X, Y, bounds, optimizer.method, optimizer.xi, optimizer.seed + index), optimizer.method
 
 
-def _composite_point(history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None, baseline: Trial | None) -> np.ndarray:
+def _composite_point(history: list[Trial], X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None) -> np.ndarray:
     from stl_lfd.optim.composite import propose_composite
     from stl_lfd.stl import Semantics
 
-    index = len(history)
-    names = parts.names if parts is not None else ()
-    usable = bool(names) and baseline is not None and baseline.robustness is not None and part_observations([baseline], names) is not None
-    seen = [baseline] + history if usable else history
-    X, Y = observations(seen)
-    if len(Y) == 0:
-        return random_point(bounds, optimizer.seed, index)
-    composite = part_observations(seen, names) if names else None
+    composite = part_observations(history, parts.names) if parts is not None else None
     semantics = parts.semantics if parts is not None else Semantics("classic")
     if composite is None:  # trials recorded without their parts (an older run): the robustness alone
         composite, semantics = Y[:, None], Semantics("classic")
-    design = optimizer.initial + (1 if usable else 0)
-    return propose_composite(X, composite, Y, bounds, semantics, design, optimizer.seed + index)
+    return propose_composite(X, composite, Y, bounds, semantics, optimizer.initial, optimizer.seed + len(history))
 
 
 def part_observations(history: list[Trial], names: tuple[str, ...]) -> np.ndarray | None:
@@ -148,11 +134,10 @@ def run_trials(
     history: list[Trial],
     on_trial: Callable[[Trial, object], None],
     parts: SpecParts | None = None,
-    baseline: Trial | None = None,
 ) -> list[Trial]:
     """Run trials until `optimizer.trials` are done, calling `on_trial(trial, payload)` after
-    each (to record it) and returning the whole history. `parts` and `baseline` are what
-    method `stl` models besides the trials (see `next_point`).
+    each (to record it) and returning the whole history. `parts` (the spec's top-level
+    conjuncts) is what method `stl` models.
 
     A trial whose objective raises or returns a non-finite value is recorded as failed with
     its error; the loop goes on.
@@ -160,7 +145,7 @@ def run_trials(
     history = list(history)
     while len(history) < optimizer.trials:
         start = time.perf_counter()
-        x, phase = next_point(history, bounds, optimizer, parts, baseline)
+        x, phase = next_point(history, bounds, optimizer, parts)
         chosen = time.perf_counter()
         trial = Trial(len(history) + 1, phase, x, None, optimizer_seconds=chosen - start)
         payload = None

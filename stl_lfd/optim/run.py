@@ -115,8 +115,6 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
     previous_seconds = float(prepared.summary.get("wall_seconds", 0.0))
     initial_robustness = prepared.summary["initial_robustness"]
     initial_components = prepared.summary.get("initial_components")
-    # The unoptimised skill, executed before the trials: what method `stl` starts from.
-    baseline = Trial(0, "initial", space.initial, initial_robustness, components=initial_components)
     start = time.perf_counter()
     best = best_trial(prepared.history)
 
@@ -135,7 +133,7 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
     history = list(prepared.history)
     if best is not None and not run.has_best_models():
         run.write_best_models(space.apply(prepared.models, best.x))
-    run_trials(prepared.objective, space.bounds, task.optimizer, prepared.history, record, prepared.objective.parts, baseline)
+    run_trials(prepared.objective, space.bounds, task.optimizer, prepared.history, record, prepared.objective.parts)
     summary = _summary(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components)
     run.write_summary(summary)
     return summary
