@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from stl_lfd.optim.composite import TrustRegion, compose, trust_region_length
-from stl_lfd.optim.loop import Outcome, Trial, best_trial, next_point, part_observations, run_trials
+from stl_lfd.optim.loop import Outcome, Trial, best_trial, part_observations, run_trials
 from stl_lfd.optim.task import Optimizer
 from stl_lfd.stl import Semantics, parse, split_spec
 
@@ -19,8 +19,8 @@ def conjunction_objective(x):
     return Outcome(PARTS.compose(values), components=dict(zip(PARTS.names, values.tolist())))
 
 
-def run(optimizer, history=(), baseline=None):
-    return run_trials(conjunction_objective, BOUNDS, optimizer, list(history), lambda trial, payload: None, PARTS, baseline)
+def run(optimizer, history=()):
+    return run_trials(conjunction_objective, BOUNDS, optimizer, list(history), lambda trial, payload: None, PARTS)
 
 
 @pytest.mark.parametrize("semantics", [Semantics("classic"), Semantics("new", 1.0), Semantics("new", 7.0)])
@@ -77,18 +77,6 @@ def test_stl_method_satisfies_a_conjunction_that_random_search_does_not():
     random = [best_trial(run(Optimizer("random", initial=5, trials=20, seed=seed))).robustness for seed in range(2)]
     assert min(found) > 0
     assert max(random) < min(found)
-
-
-def test_the_baseline_is_learned_from_but_not_recorded():
-    baseline_x = np.array([0.8, 0.2, 0.3, 0.6])  # the optimum: the trust region starts around it
-    outcome = conjunction_objective(baseline_x)
-    baseline = Trial(0, "initial", baseline_x, outcome.robustness, components=outcome.components)
-    optimizer = Optimizer("stl", initial=3, trials=3, seed=0)
-    history = run(optimizer)
-    with_baseline, _ = next_point(history, BOUNDS, optimizer, PARTS, baseline)
-    without, _ = next_point(history, BOUNDS, optimizer, PARTS)
-    assert np.linalg.norm(with_baseline - baseline_x) < np.linalg.norm(without - baseline_x)
-    assert np.all(np.abs(with_baseline - baseline_x) <= TrustRegion().initial / 2 + 1e-9)
 
 
 def test_a_spec_that_is_not_a_conjunction_runs_through_the_same_path():
