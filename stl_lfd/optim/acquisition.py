@@ -81,7 +81,6 @@ def single_threaded() -> Iterator[None]:
 def _maximise(X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, method: str, xi: float, seed: int) -> np.ndarray:
     import torch
     from botorch.acquisition.analytic import LogExpectedImprovement, LogProbabilityOfImprovement
-    from botorch.optim import optimize_acqf
 
     model = fit_gp(X, Y, bounds)
     best = float(np.max(Y))
@@ -91,15 +90,23 @@ def _maximise(X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, method: str, xi:
         acquisition = LogExpectedImprovement(model, best_f=best)
     else:
         raise ValueError(f"unknown acquisition {method!r}")
-    candidate, _ = optimize_acqf(
-        acquisition,
-        bounds=torch.as_tensor(bounds, dtype=torch.float64),
-        q=1,
-        num_restarts=ACQUISITION_RESTARTS,
-        raw_samples=RAW_SAMPLES,
-        options={"seed": seed, "maxiter": ACQUISITION_ITERATIONS},
-    )
-    return np.clip(candidate.detach().numpy()[0], bounds[0], bounds[1])
+    candidate = maximise_acquisition(acquisition, bounds, ACQUISITION_RESTARTS, RAW_SAMPLES, seed, ACQUISITION_ITERATIONS)
+    return np.clip(candidate, bounds[0], bounds[1])
+
+
+def maximise_acquisition(acquisition, box: np.ndarray, restarts: int, raw_samples: int, seed: int, iterations: int | None = None) -> np.ndarray:
+    """The maximiser (`d`) of a q = 1 acquisition function inside `box` (`2 x d`): BoTorch's
+    multi-start L-BFGS-B, `iterations` per restart (None: BoTorch's default)."""
+    import torch
+    from botorch.optim import optimize_acqf
+
+    options = {"seed": seed} | ({"maxiter": iterations} if iterations is not None else {})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # restarts that end on flat regions warn
+        candidate, _ = optimize_acqf(
+            acquisition, bounds=torch.as_tensor(box, dtype=torch.float64), q=1, num_restarts=restarts, raw_samples=raw_samples, options=options
+        )
+    return candidate.detach().numpy()[0]
 
 
 def fit_gp(X: np.ndarray, Y: np.ndarray, bounds: np.ndarray):

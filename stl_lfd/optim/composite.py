@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stl_lfd.optim.acquisition import FIT_ITERATIONS, single_threaded
+from stl_lfd.optim.acquisition import FIT_ITERATIONS, maximise_acquisition, single_threaded
 from stl_lfd.stl import Semantics
 
 MC_SAMPLES = 64
@@ -95,24 +95,13 @@ def propose_composite(
 
 def _maximise(X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarray, semantics: Semantics, initial: int, seed: int) -> np.ndarray:
     import torch
-    from botorch.optim import optimize_acqf
 
     torch.manual_seed(seed)
     unit = (X - bounds[0]) / (bounds[1] - bounds[0])
     model = fit_multi_output_gp(unit, parts)
     acquisition = composed_log_ei(model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed)
     box = _trust_box(unit[int(np.argmax(Y))], trust_region_length(Y, initial))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # optimize_acqf's restarts warn on flat regions
-        candidate, _ = optimize_acqf(
-            acquisition,
-            bounds=torch.as_tensor(box, dtype=torch.float64),
-            q=1,
-            num_restarts=RESTARTS,
-            raw_samples=RAW_SAMPLES,
-            options={"seed": seed},
-        )
-    point = bounds[0] + candidate.detach().numpy()[0] * (bounds[1] - bounds[0])
+    point = bounds[0] + maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed) * (bounds[1] - bounds[0])
     return np.clip(point, bounds[0], bounds[1])
 
 
