@@ -213,8 +213,14 @@ def run_suite(problems: list[str], methods: list[str], seeds: list[int], jobs: i
 
 
 def summarise(problems: list[str], methods: list[str], seeds: list[int] | None = None) -> list[dict]:
-    """One row per (problem, method) of the recorded runs, then one `all` row per method."""
+    """One row per (problem, method) of the recorded runs, then one `all` row per method. Only
+    the (problem, seed) pairs that every method has finished count, so methods are compared on
+    the same seeds."""
     records = [r for r in _recorded(RESULTS) if r["problem"] in problems and r["method"] in methods and (seeds is None or r["seed"] in seeds)]
+    finished: dict[tuple[str, int], set[str]] = {}
+    for r in records:
+        finished.setdefault((r["problem"], r["seed"]), set()).add(r["method"])
+    records = [r for r in records if finished[(r["problem"], r["seed"])] >= set(methods)]
     searches = {r["problem"]: r for r in _recorded(SEARCH_RESULTS)}
     rows, totals = [], {method: [0, 0] for method in methods}
     for problem in problems:
@@ -232,6 +238,7 @@ def summarise(problems: list[str], methods: list[str], seeds: list[int] | None =
                     "budget": str(runs[0]["budget"]),
                     "search best": f"{search['best_robustness']:+.4f} ({search['satisfied_fraction']:.1%} of {search['points']})" if search else "",
                     "method": method,
+                    "seeds": " ".join(str(r["seed"]) for r in sorted(runs, key=lambda r: r["seed"])),
                     "satisfied": f"{len(firsts)}/{len(runs)}",
                     "median first": f"{statistics.median(firsts):g}" if firsts else "-",
                     "median best": f"{statistics.median(r['best_robustness'] for r in runs):+.4f}",
@@ -245,7 +252,7 @@ def summarise(problems: list[str], methods: list[str], seeds: list[int] | None =
     return rows
 
 
-COLUMNS = ("problem", "budget", "search best", "method", "satisfied", "median first", "median best", "optimiser s/trial", "rollout s/trial")
+COLUMNS = ("problem", "budget", "search best", "method", "seeds", "satisfied", "median first", "median best", "optimiser s/trial", "rollout s/trial")
 
 
 def print_table(problems: list[str], methods: list[str], seeds: list[int] | None = None, markdown: bool = False) -> None:
