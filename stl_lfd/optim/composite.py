@@ -112,8 +112,8 @@ def composed_log_ei(model, best: float, scale: float, semantics: Semantics, part
     normals: `MC_SAMPLES` fixed scrambled-Sobol normal draws (`S x m`) are scaled by each
     point's posterior means and standard deviations, composed, and the improvement averaged.
     This is `qLogExpectedImprovement` with a `GenericMCObjective` for q = 1, computed from
-    `PartsPosterior` instead of the joint posterior and its Cholesky factor (about 10x faster
-    here). As in LogEI, the improvement's ReLU is smoothed (softplus with temperature
+    `PartsPosterior` instead of the joint posterior and its Cholesky factor (0.24 s instead of
+    1.75 s to maximise on a phi1 history). As in LogEI, the improvement's ReLU is smoothed (softplus with temperature
     `0.01 scale`) and averaged in log space, so that the acquisition keeps a gradient far from
     improvement.
     """
