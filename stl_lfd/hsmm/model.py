@@ -123,8 +123,7 @@ class HSMM:
         transition of positive probability (the argmax of the marginal occupancy is not: it
         can skip a state and take a transition of probability 0). Switches fall at the rounded
         cumulative duration means (each state keeps one step at least), so the sequence reaches
-        its last state after
-        `expected_duration()` minus that state's duration.
+        its last state after `expected_duration()` minus that state's duration.
         """
         self._check()
         dt = self.sample_period_ if dt is None else dt

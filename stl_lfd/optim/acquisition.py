@@ -113,11 +113,8 @@ def fit_gp(X: np.ndarray, Y: np.ndarray, bounds: np.ndarray):
     """A `SingleTaskGP` (inputs normalised to the bounds, outputs standardised) fitted by
     maximum marginal likelihood."""
     import torch
-    from botorch.exceptions.warnings import OptimizationWarning
-    from botorch.fit import fit_gpytorch_mll
     from botorch.models import SingleTaskGP
     from botorch.models.transforms import Normalize, Standardize
-    from gpytorch.mlls import ExactMarginalLogLikelihood
 
     train_X = torch.as_tensor(X, dtype=torch.float64)
     train_Y = torch.as_tensor(Y, dtype=torch.float64).reshape(-1, 1)
@@ -127,6 +124,16 @@ def fit_gp(X: np.ndarray, Y: np.ndarray, bounds: np.ndarray):
         input_transform=Normalize(X.shape[1], bounds=torch.as_tensor(bounds, dtype=torch.float64)),
         outcome_transform=Standardize(1),
     )
+    return fit_hyperparameters(model)
+
+
+def fit_hyperparameters(model):
+    """`model` with its hyperparameters fitted by maximum marginal likelihood (L-BFGS-B capped
+    at FIT_ITERATIONS)."""
+    from botorch.exceptions.warnings import OptimizationWarning
+    from botorch.fit import fit_gpytorch_mll
+    from gpytorch.mlls import ExactMarginalLogLikelihood
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OptimizationWarning)  # stopping at the iteration cap is intended
         fit_gpytorch_mll(ExactMarginalLogLikelihood(model.likelihood, model), optimizer_kwargs={"options": {"maxiter": FIT_ITERATIONS}})

@@ -14,12 +14,11 @@ that a resumed run proposes exactly the points an uninterrupted one would.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from stl_lfd.optim.acquisition import FIT_ITERATIONS, maximise_acquisition, single_threaded
+from stl_lfd.optim.acquisition import fit_hyperparameters, maximise_acquisition, single_threaded
 from stl_lfd.stl import Semantics
 
 MC_SAMPLES = 64
@@ -32,13 +31,11 @@ class TrustRegion:
     """TuRBO's box, as a side length in the unit cube around the incumbent.
 
     Attributes:
-        length: current side (the box is clipped to the bounds).
         initial, minimum, maximum: side at the start, restart threshold, and cap.
         success_tolerance, failure_tolerance: consecutive successes (failures) that double
             (halve) the side.
     """
 
-    length: float = 0.8
     initial: float = 0.8
     minimum: float = 0.5**5
     maximum: float = 1.6
@@ -113,9 +110,9 @@ def composed_log_ei(model, best: float, scale: float, semantics: Semantics, part
     point's posterior means and standard deviations, composed, and the improvement averaged.
     This is `qLogExpectedImprovement` with a `GenericMCObjective` for q = 1, computed from
     `PartsPosterior` instead of the joint posterior and its Cholesky factor (0.24 s instead of
-    1.75 s to maximise on a phi1 history). As in LogEI, the improvement's ReLU is smoothed (softplus with temperature
-    `0.01 scale`) and averaged in log space, so that the acquisition keeps a gradient far from
-    improvement.
+    1.75 s to maximise on a phi1 history). As in LogEI, the improvement's ReLU is smoothed
+    (softplus with temperature `0.01 scale`) and averaged in log space, so that the acquisition
+    keeps a gradient far from improvement.
     """
     import math
 
@@ -192,19 +189,12 @@ def fit_multi_output_gp(unit_X, parts: np.ndarray):
     """A `SingleTaskGP` with one independent output per part (`n x d` inputs in the unit cube,
     `n x m` outputs standardised per part), fitted by maximum marginal likelihood."""
     import torch
-    from botorch.exceptions.warnings import OptimizationWarning
-    from botorch.fit import fit_gpytorch_mll
     from botorch.models import SingleTaskGP
     from botorch.models.transforms import Standardize
-    from gpytorch.mlls import ExactMarginalLogLikelihood
 
     train_X = torch.as_tensor(unit_X, dtype=torch.float64)
     train_Y = torch.as_tensor(parts, dtype=torch.float64)
-    model = SingleTaskGP(train_X, train_Y, outcome_transform=Standardize(train_Y.shape[-1]))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", OptimizationWarning)  # stopping at the iteration cap is intended
-        fit_gpytorch_mll(ExactMarginalLogLikelihood(model.likelihood, model), optimizer_kwargs={"options": {"maxiter": FIT_ITERATIONS}})
-    return model
+    return fit_hyperparameters(SingleTaskGP(train_X, train_Y, outcome_transform=Standardize(train_Y.shape[-1])))
 
 
 def compose(values, semantics: Semantics):

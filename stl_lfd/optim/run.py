@@ -18,18 +18,15 @@ from stl_lfd.optim.rundir import RunDirectory
 from stl_lfd.optim.space import SearchSpace, build_search_space
 from stl_lfd.optim.task import SINGLE_SKILL, Task
 from stl_lfd.sim import Scene, execute, load_scene
-from stl_lfd.stl import Robustness, SpecParts, compile_spec, load_spec, split_spec
+from stl_lfd.stl import SpecParts, compile_spec, load_spec, split_spec
 
 
 class SkillObjective:
     """x -> adapted models -> (behaviour) reference -> rollout -> robustness of the recorded
     signals and of the spec's top-level parts (payload: the signals)."""
 
-    def __init__(
-        self, models: dict[str, HSMM], space: SearchSpace, task: Task, behaviour: Behaviour | None, scene: Scene, robustness: Robustness, parts: SpecParts
-    ) -> None:
-        self.models, self.space, self.task, self.behaviour, self.scene = models, space, task, behaviour, scene
-        self.robustness, self.parts = robustness, parts
+    def __init__(self, models: dict[str, HSMM], space: SearchSpace, task: Task, behaviour: Behaviour | None, scene: Scene, parts: SpecParts) -> None:
+        self.models, self.space, self.task, self.behaviour, self.scene, self.parts = models, space, task, behaviour, scene, parts
 
     def __call__(self, x: np.ndarray) -> Outcome:
         return self.evaluate(self.space.apply(self.models, x))
@@ -37,8 +34,9 @@ class SkillObjective:
     def evaluate(self, models: dict[str, HSMM]) -> Outcome:
         reference = reference_for(models, self.behaviour, self.scene.gripper_opening, self.task.duration)
         signals = execute(reference, self.scene, self.task.backend, self.task.rate).signals
-        components = dict(zip(self.parts.names, self.parts(signals.columns, signals.times).tolist()))
-        return Outcome(self.robustness(signals.columns, signals.times), signals, components)
+        # The spec is evaluated once, part by part; composing the parts is exactly its robustness.
+        values = self.parts(signals.columns, signals.times)
+        return Outcome(self.parts.compose(values), signals, dict(zip(self.parts.names, values.tolist())))
 
 
 @dataclass
@@ -78,7 +76,7 @@ def objective_for(task: Task, models: dict[str, HSMM]) -> tuple[SearchSpace, Ski
         raise SpecError(f"{task.spec}: signal {', '.join(unknown)} is not recorded by rollouts (they record {', '.join(sorted(recorded))})")
     behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None
     parts = split_spec(spec, task.semantics, task.nu, source=str(task.spec))
-    return space, SkillObjective(models, space, task, behaviour, load_scene(task.scene), robustness, parts)
+    return space, SkillObjective(models, space, task, behaviour, load_scene(task.scene), parts)
 
 
 def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lambda message: None) -> PreparedRun:
