@@ -8,6 +8,8 @@ the code of its class in `stl_lfd.errors`; usage errors exit 2.
 from __future__ import annotations
 
 import json
+import os
+import signal
 import sys
 import warnings
 from contextlib import contextmanager
@@ -18,7 +20,7 @@ from typing import Iterator, Optional
 import typer
 
 from stl_lfd import __version__
-from stl_lfd.errors import ConfigError, ExecutionError, ModelError, StlLfdError
+from stl_lfd.errors import ExecutionError, ModelError, StlLfdError
 
 app = typer.Typer(
     help="Adapt demonstrated robot skills to Signal Temporal Logic requirements.",
@@ -43,15 +45,38 @@ def _print_warning(message, category, filename, lineno, file=None, line=None) ->
     print(f"warning: {message}", file=sys.stderr)
 
 
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+SIGNAL_SUFFIXES = (".csv",)
+INTERRUPTED = 130  # what a shell reports for a process that SIGINT ended
+
+
 @contextmanager
-def user_errors() -> Iterator[None]:
-    """Turn library errors into one stderr line and the error class's exit code."""
+def user_errors(on_interrupt: str = "interrupted") -> Iterator[None]:
+    """Turn library errors into one stderr line and the error class's exit code, and Ctrl-C
+    into the line `on_interrupt` and an interrupted exit (see `main`)."""
     warnings.showwarning = _print_warning
     try:
         yield
     except StlLfdError as error:
         print(f"error: {error}", file=sys.stderr)
         raise typer.Exit(code=error.exit_code) from None
+    except KeyboardInterrupt:
+        print(on_interrupt, file=sys.stderr)
+        raise typer.Exit(code=INTERRUPTED) from None
+
+
+def main() -> None:
+    """The `stlopt` program. After Ctrl-C it dies by SIGINT (not a plain exit 130), so that a
+    shell loop of runs stops instead of going on to the next one."""
+    try:
+        app()
+    except SystemExit as stop:
+        if stop.code == INTERRUPTED:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            signal.signal(signal.SIGINT, signal.SIG_DFL)
+            os.kill(os.getpid(), signal.SIGINT)
+        raise
 
 
 def _version(value: bool) -> None:
@@ -61,7 +86,7 @@ def _version(value: bool) -> None:
 
 
 @app.callback()
-def main(
+def _root(
     version: bool = typer.Option(False, "--version", callback=_version, is_eager=True, help="Print the version and exit."),
 ) -> None:
     """Adapt demonstrated robot skills to Signal Temporal Logic requirements."""
@@ -112,9 +137,13 @@ def learn(
 
         stlopt learn demos/three_regions -K 6 -o three_regions.npz --plot skill.png
     """
+    from stl_lfd.files import atomic_output, check_output_file
     from stl_lfd.hsmm import learn_from_folder, retrieve, save_model, summary_rows
 
     with user_errors():
+        check_output_file(output, (".npz",), "model file")
+        if plot is not None:
+            check_output_file(plot, FIGURE_SUFFIXES, "figure")
         model, sequences = learn_from_folder(demos_dir, states, sample_period)
         save_model(model, output)
         if plot is not None:
@@ -122,7 +151,8 @@ def learn(
 
             trajectory = retrieve(model)
             figure = skill_figure(sequences, model.means_, model.covars_, trajectory.positions, model.sample_period_, model.signal_names_)
-            figure.savefig(plot, dpi=110)
+            with atomic_output(plot) as temporary:
+                figure.savefig(temporary, dpi=110)
     _print_summary(summary_rows(model), model.signal_names_)
     print(f"wrote {output} ({len(sequences)} demonstrations, K = {states}, {len(model.monitor_.history)} EM iterations)", file=sys.stderr)
 
@@ -151,18 +181,21 @@ def retrieve(
 
         stlopt retrieve three_regions.npz --rate 240 -o reference.csv
     """
+    from stl_lfd.files import check_output_file
     from stl_lfd.hsmm import load_model
     from stl_lfd.hsmm import retrieve as retrieve_trajectory
     from stl_lfd.signals import SignalTable, write_signal_csv
 
     with user_errors():
+        if output is not None:
+            check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
         model = load_model(model_file)
         if rate is not None and not rate > 0:
             raise ModelError(f"--rate must be positive (got {rate})")
         trajectory = retrieve_trajectory(model, duration, rate)
-    columns = {name: trajectory.positions[:, index] for index, name in enumerate(trajectory.signal_names)}
-    columns["state"] = trajectory.states + 1.0
-    write_signal_csv(SignalTable(trajectory.times, columns), output if output is not None else sys.stdout)
+        columns = {name: trajectory.positions[:, index] for index, name in enumerate(trajectory.signal_names)}
+        columns["state"] = trajectory.states + 1.0
+        write_signal_csv(SignalTable(trajectory.times, columns), output if output is not None else sys.stdout)
     if output is not None:
         print(f"wrote {output} ({trajectory.times.size} samples, {trajectory.times[-1]:.2f} s)", file=sys.stderr)
 
@@ -185,18 +218,21 @@ def rollout(
     import time
 
     from stl_lfd.execution import rollout_model
+    from stl_lfd.files import check_output_file
     from stl_lfd.hsmm import load_model
     from stl_lfd.signals import write_signal_csv
     from stl_lfd.sim import load_scene
 
     with user_errors():
         _check_duration_and_rate(duration, rate)
+        if output is not None:
+            check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
         model = load_model(model_file)
         world = load_scene(scene)
         start = time.perf_counter()
         result = rollout_model(model, world, backend.value, duration, rate)
         elapsed = time.perf_counter() - start
-    write_signal_csv(result.signals, output if output is not None else sys.stdout)
+        write_signal_csv(result.signals, output if output is not None else sys.stdout)
     simulated = result.signals.duration
     print(
         f"{backend.value} rollout in {world.name}: {simulated:.2f} s simulated in {elapsed:.2f} s "
@@ -287,26 +323,22 @@ def optimize(
         stlopt optimize configs/phi1.yaml --out runs/phi1-seed3 --resume --iterations 48
     """
     from stl_lfd.optim import load_task, optimise, resume_run, start_run
+    from stl_lfd.optim.resume import inputs_record
     from stl_lfd.progress import TrialPrinter
 
+    given = dict(spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None)
     with user_errors():
-        task = load_task(task_file)
-        run_dir = out or Path("runs") / task.name
+        file_task = load_task(task_file)
+        run_dir = out or Path("runs") / file_task.name
         if resume:
-            given = {"--spec": spec, "--init": init, "--seed": seed, "--backend": backend, "--method": method}
-            changed = [name for name, value in given.items() if value is not None]
-            if changed:
-                raise ConfigError(f"{run_dir}: {', '.join(changed)} cannot change on --resume (the run keeps its task.yaml); only --iterations can")
-            prepared = resume_run(run_dir, iterations)
+            prepared = resume_run(run_dir, iterations, file_task, given)
         else:
-            overrides = dict(spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None)
-            prepared = start_run(task.with_overrides(**overrides), run_dir, lambda message: print(message, file=sys.stderr))
+            task = file_task.with_overrides(**given)
+            prepared = start_run(task, run_dir, lambda message: print(message, file=sys.stderr), inputs_record(file_task, given, task))
+    again = f"stlopt optimize {task_file} --out {run_dir} --resume"
+    with prepared, user_errors(on_interrupt=f"interrupted; the finished trials are kept. Continue with: {again}"):
         printer = TrialPrinter(prepared)
-        try:
-            summary = optimise(prepared, printer.trial)
-        except KeyboardInterrupt:
-            print(f"interrupted; the finished trials are kept. Continue with: stlopt optimize {task_file} --out {run_dir} --resume", file=sys.stderr)
-            raise typer.Exit(code=130) from None
+        summary = optimise(prepared, printer.trial)
         printer.done(summary)
     print(json.dumps(summary, indent=2))
 
@@ -351,4 +383,4 @@ def _progress_bar(description: str, total: int) -> Iterator:
 
 
 if __name__ == "__main__":
-    app()
+    main()

@@ -94,6 +94,19 @@ class ExecutionError(StlLfdError):
     exit_code = 7
 
 
+class OutputError(StlLfdError):
+    """An output path cannot be written: a missing or read-only folder, a folder where a file
+    is expected, an unknown suffix, or a full disk."""
+
+    exit_code = 8
+
+
+class RunError(StlLfdError):
+    """A run directory is damaged, in use by another process, or not the run asked for."""
+
+    exit_code = 9
+
+
 def caret_context(text: str, line: int, column: int) -> str:
     """The `line`-th line of `text` (1-based) and a caret under `column` (1-based)."""
     lines = text.splitlines()

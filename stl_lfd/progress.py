@@ -26,6 +26,9 @@ class TrialPrinter:
         )
         self.console.print(f"unoptimised skill: robustness {initial:+.5f} ({_verdict(initial > 0)})")
         plan = f"{optimizer.trials} trials: {optimizer.initial} Sobol, then {optimizer.method}"
+        if done >= optimizer.trials:
+            self.console.print(plan + f"; the run is complete ({done} trials; raise --iterations to extend it)")
+            return
         self.console.print(plan + (f"; resuming after trial {done}" if done else ""))
         self.console.print(f"[dim]{'trial':>7} {'phase':>6} {'robustness':>11} {'best':>11} {'satisfied':>9} {'time':>7}[/]")
 

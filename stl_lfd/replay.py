@@ -6,7 +6,6 @@ spec, scene, duration and semantics of the run).
 
 from __future__ import annotations
 
-import os
 from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,6 +14,7 @@ from typing import Callable
 from stl_lfd.behaviour import load_behaviour, reference_for
 from stl_lfd.errors import ConfigError, ExecutionError
 from stl_lfd.evaluate import evaluate_table
+from stl_lfd.files import atomic_output, check_output_file
 from stl_lfd.execution import scene_with_spec_regions
 from stl_lfd.hsmm import HSMM, load_model
 from stl_lfd.sim import DEFAULT_RATE, execute
@@ -61,6 +61,10 @@ class ReplayOutcome:
 def replay_skill(request: ReplayRequest, gui: bool, video: Path | None, progress: ProgressFactory) -> ReplayOutcome:
     """Execute the requested skill in the GUI (real time) or headless into a video."""
     skill = resolve_skill(request)
+    if not gui:
+        from stl_lfd.sim.video import VIDEO_SUFFIXES
+
+        video = check_output_file(video if video is not None else skill.default_video, VIDEO_SUFFIXES, "video")
     scene = scene_with_spec_regions(skill.scene, skill.spec)
     behaviour = load_behaviour(skill.behaviour) if skill.behaviour is not None else None
     reference = reference_for(skill.models, behaviour, scene.gripper_opening, skill.duration)
@@ -74,7 +78,7 @@ def replay_skill(request: ReplayRequest, gui: bool, video: Path | None, progress
             backend.close()
         written, frames = None, 0
     else:
-        written = Path(video) if video is not None else skill.default_video
+        written = video
         rollout, frames = _film(reference, scene, written, progress)
     robustness = None
     if skill.spec is not None:
@@ -86,17 +90,12 @@ def _film(reference, scene, path: Path, progress: ProgressFactory):
     """Execute while filming into `path`; the file appears only once it is complete."""
     from stl_lfd.sim.video import VideoRecorder, frame_count
 
-    partial = path.with_name(f".{path.stem}.partial{path.suffix}")
-    with progress(f"filming {path.name}", frame_count(reference.duration, scene.camera.fps)) as advance:
+    with atomic_output(path) as partial, progress(f"filming {path.name}", frame_count(reference.duration, scene.camera.fps)) as advance:
         recorder = VideoRecorder(partial, scene.camera, advance)
         try:
             rollout = execute(reference, scene, "pybullet", DEFAULT_RATE, recorder)
-        except BaseException:
+        finally:
             recorder.close()
-            partial.unlink(missing_ok=True)
-            raise
-        recorder.close()
-    os.replace(partial, path)
     return rollout, recorder.frames
 
 

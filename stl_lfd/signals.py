@@ -16,6 +16,7 @@ from typing import TextIO
 import numpy as np
 
 from stl_lfd.errors import SignalError
+from stl_lfd.files import write_atomically
 
 TIME_COLUMN = "t"
 
@@ -88,13 +89,6 @@ def write_signal_csv(table: SignalTable, destination: str | Path | TextIO) -> No
     else:
         stream = sys.stdout if isinstance(destination, (str, Path)) else destination
         stream.write(body.getvalue())
-
-
-def write_atomically(path: Path, text: str) -> None:
-    """Write `text` to `path` through a temporary file, so that `path` is never half-written."""
-    temporary = path.with_name(f".{path.name}.tmp")
-    temporary.write_text(text)
-    os.replace(temporary, path)
 
 
 # --- Helper functions -----------------------------------------------------------------------

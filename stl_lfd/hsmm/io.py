@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from stl_lfd.errors import ModelError
+from stl_lfd.files import atomic_output
 from stl_lfd.hsmm.model import HSMM
 
 FORMAT = "stlopt-hsmm"
@@ -16,20 +17,18 @@ _ARRAYS = ("means_", "covars_", "duration_means_", "duration_stds_", "transmat_"
 
 
 def save_model(model: HSMM, path: str | Path) -> None:
-    """Write `model` to `path` (.npz); written to a temporary file first, then renamed."""
+    """Write `model` to `path` (.npz), atomically (see `stl_lfd.files`)."""
     model._check()
-    path = Path(path)
-    temporary = path.with_name(path.name + ".tmp.npz")
-    np.savez(
-        temporary,
-        format=FORMAT,
-        format_version=FORMAT_VERSION,
-        n_states=model.n_states,
-        sample_period=model.sample_period_,
-        signal_names=np.array(model.signal_names_),
-        **{name.rstrip("_"): np.asarray(getattr(model, name)) for name in _ARRAYS},
-    )
-    temporary.replace(path)
+    with atomic_output(path) as temporary:
+        np.savez(
+            temporary,
+            format=FORMAT,
+            format_version=FORMAT_VERSION,
+            n_states=model.n_states,
+            sample_period=model.sample_period_,
+            signal_names=np.array(model.signal_names_),
+            **{name.rstrip("_"): np.asarray(getattr(model, name)) for name in _ARRAYS},
+        )
 
 
 def load_model(path: str | Path) -> HSMM:

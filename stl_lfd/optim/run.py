@@ -11,10 +11,11 @@ from typing import Any, Callable
 import numpy as np
 
 from stl_lfd.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
-from stl_lfd.errors import ConfigError, SpecError
+from stl_lfd.errors import ConfigError, RunError, SpecError
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
 from stl_lfd.optim.loop import Outcome, Trial, best_trial, run_trials
-from stl_lfd.optim.rundir import RunDirectory
+from stl_lfd.optim.resume import check_resume, inputs_record
+from stl_lfd.optim.rundir import RunDirectory, check_new_run_path
 from stl_lfd.optim.space import SearchSpace, build_search_space
 from stl_lfd.optim.task import SINGLE_SKILL, Task
 from stl_lfd.sim import Scene, execute, load_scene
@@ -49,6 +50,16 @@ class PreparedRun:
     history: list[Trial]
     summary: dict[str, Any]
 
+    def close(self) -> None:
+        """Release the run directory's write lock (ending the process releases it too)."""
+        self.run.close()
+
+    def __enter__(self) -> "PreparedRun":
+        return self
+
+    def __exit__(self, *exception: object) -> None:
+        self.close()
+
 
 def task_models(task: Task) -> dict[str, HSMM]:
     """The skills of a task: learned from its demos, loaded, or those of its behaviour."""
@@ -79,30 +90,45 @@ def objective_for(task: Task, models: dict[str, HSMM]) -> tuple[SearchSpace, Ski
     return space, SkillObjective(models, space, task, behaviour, load_scene(task.scene), parts)
 
 
-def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lambda message: None) -> PreparedRun:
-    """Learn or load the model, check the spec, execute the unoptimised skill, then create the
-    run directory with all of that in it."""
+def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lambda message: None, inputs: dict[str, Any] | None = None) -> PreparedRun:
+    """Check `out`, learn or load the model, check the spec, execute the unoptimised skill, then
+    create the run directory with all of that in it. `inputs` is the record of the task file and
+    command-line overrides (`resume.inputs_record`; default: `task` as its own file)."""
+    check_new_run_path(Path(out))
     learn_progress(f"learning the skills of {task.source.name}" if task.model is None else f"loading {task.model}")
     models = task_models(task)
     space, objective = objective_for(task, models)
     start = time.perf_counter()
     initial = objective.evaluate(models)
     summary = _summary(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
-    run = RunDirectory.create(out, task, models, initial.payload, summary)
+    inputs = inputs if inputs is not None else inputs_record(task, {}, task)
+    run = RunDirectory.create(out, task, models, initial.payload, summary, inputs)
     return PreparedRun(task, run, models, space, objective, [], summary)
 
 
-def resume_run(out: Path, trials: int | None = None) -> PreparedRun:
-    """Reopen a run directory to finish it (or extend it to `trials` in total)."""
-    run = RunDirectory.open(out)
+def resume_run(out: Path, trials: int | None = None, file_task: Task | None = None, given: dict[str, Any] | None = None) -> PreparedRun:
+    """Reopen a run directory to finish it (or extend it to `trials` in total), holding its
+    write lock. With `file_task` (the task file named on the command line) and `given` (the
+    options given again), refuse when they ask for another run than the recorded one."""
+    run = RunDirectory.open(out, for_writing=True)
+    try:
+        return _reopen(run, out, trials, file_task, given or {})
+    except BaseException:
+        run.close()
+        raise
+
+
+def _reopen(run: RunDirectory, out: Path, trials: int | None, file_task: Task | None, given: dict[str, Any]) -> PreparedRun:
     task = run.task()
+    if file_task is not None:
+        check_resume(Path(out), task, run.inputs(), file_task, given)
     if trials is not None:
         task = task.with_overrides(trials=trials)
     models = run.models()
     space, objective = objective_for(task, models)
     history = run.trials()
     if any(len(trial.x) != space.dimension for trial in history):
-        raise ConfigError(f"{out}: the recorded trials do not match the task's {space.dimension} parameters")
+        raise RunError(f"{run.path / 'trials.jsonl'}: damaged (the recorded points do not have the task's {space.dimension} parameters)")
     summary = run.summary()
     return PreparedRun(task, run, models, space, objective, history, summary)
 

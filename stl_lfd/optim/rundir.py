@@ -9,6 +9,9 @@ runs/<name>/
   signals/trial-NNNN.csv  the recorded signals of each successful trial
   best_model.npz       the model of the best trial so far (best_model-NAME.npz per skill)
   summary.json         initial and best robustness, best trial, counts, wall time
+  inputs.json          the task file's own settings, the command-line overrides, and a
+                       fingerprint of the files a resume reads (spec, behaviour, scene)
+  .lock                held (advisory lock) by the process writing the run; names its PID
 ```
 
 The directory appears complete (task, model, initial signals and summary) or not at all. A
@@ -19,7 +22,9 @@ most the trial in flight.
 
 from __future__ import annotations
 
+import fcntl
 import json
+import math
 import os
 import shutil
 import tempfile
@@ -30,12 +35,13 @@ from typing import Any
 import numpy as np
 import yaml
 
-from stl_lfd.errors import ConfigError
+from stl_lfd.errors import ConfigError, RunError
+from stl_lfd.files import check_output_folder, folder_mode, write_atomically
 from stl_lfd.hsmm import HSMM, load_model, save_model
 from stl_lfd.optim.loop import Trial
 from stl_lfd.optim.space import build_search_space
 from stl_lfd.optim.task import SINGLE_SKILL, Task, load_task
-from stl_lfd.signals import SignalTable, write_atomically, write_signal_csv
+from stl_lfd.signals import SignalTable, write_signal_csv
 
 TASK_FILE = "task.yaml"
 MODEL_FILE = "model.npz"
@@ -43,25 +49,35 @@ BEST_MODEL_FILE = "best_model.npz"
 TRIALS_FILE = "trials.jsonl"
 SUMMARY_FILE = "summary.json"
 SIGNALS_DIR = "signals"
+INPUTS_FILE = "inputs.json"
+LOCK_FILE = ".lock"
 
 
 class RunDirectory:
     """Reads and writes one run directory (see the module docstring for its layout)."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, lock: "RunLock | None" = None) -> None:
         self.path = Path(path)
+        self.lock = lock
 
     @classmethod
-    def create(cls, path: Path, task: Task, models: dict[str, HSMM], initial_signals: SignalTable, summary: dict[str, Any]) -> "RunDirectory":
-        """Write a new run directory in one step (built beside it, then renamed into place)."""
+    def create(
+        cls, path: Path, task: Task, models: dict[str, HSMM], initial_signals: SignalTable, summary: dict[str, Any], inputs: dict[str, Any] | None = None
+    ) -> "RunDirectory":
+        """Write a new run directory in one step (built beside it, then renamed into place),
+        locked for writing by this process."""
         path = Path(path)
-        if path.exists() and (not path.is_dir() or any(path.iterdir())):
-            raise ConfigError(f"{path}: the run directory exists; continue it with --resume or choose another with --out")
+        check_new_run_path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+        lock = None
         try:
+            staging.chmod(folder_mode())  # mkdtemp makes it private; a run folder is an ordinary one
+            lock = RunLock.acquire(staging, path)
             run = cls(staging)
             write_atomically(staging / TASK_FILE, yaml.safe_dump(task.to_yaml_dict(), sort_keys=False))
+            if inputs is not None:
+                write_atomically(staging / INPUTS_FILE, json.dumps(inputs, indent=2) + "\n")
             for skill, model in models.items():
                 save_model(model, staging / _model_file(MODEL_FILE, skill))
             (staging / SIGNALS_DIR).mkdir()
@@ -72,20 +88,46 @@ class RunDirectory:
                 path.rmdir()
             os.replace(staging, path)
         except BaseException:
+            if lock is not None:
+                lock.release()
             shutil.rmtree(staging, ignore_errors=True)
             raise
-        return cls(path)
+        return cls(path, lock)
 
     @classmethod
-    def open(cls, path: Path) -> "RunDirectory":
-        """An existing run directory; ConfigError when `path` is not one."""
+    def open(cls, path: Path, for_writing: bool = False) -> "RunDirectory":
+        """An existing run directory; RunError when `path` is not one, or (`for_writing`)
+        when another process is writing it."""
         path = Path(path)
+        if not path.is_dir():
+            raise RunError(f"{path}: no such run directory" if not path.exists() else f"{path}: is a file, not a run directory")
         for name in (TASK_FILE, TRIALS_FILE, SUMMARY_FILE):
             if not (path / name).is_file():
-                raise ConfigError(f"{path}: not a run directory of stlopt optimize (no {name})")
+                raise RunError(f"{path}: not a run directory of stlopt optimize, or a damaged one (no {name})")
         if not list(path.glob("model*.npz")):
-            raise ConfigError(f"{path}: not a run directory of stlopt optimize (no {MODEL_FILE})")
-        return cls(path)
+            raise RunError(f"{path}: not a run directory of stlopt optimize, or a damaged one (no {MODEL_FILE})")
+        if not (path / SIGNALS_DIR).is_dir():
+            raise RunError(f"{path}: a damaged run directory (its {SIGNALS_DIR}/ folder is missing)")
+        return cls(path, RunLock.acquire(path, path) if for_writing else None)
+
+    def close(self) -> None:
+        """Release the write lock (if held); the kernel also releases it when the process ends."""
+        if self.lock is not None:
+            self.lock.release()
+            self.lock = None
+
+    def inputs(self) -> dict[str, Any] | None:
+        """The record of the task file, overrides and input fingerprints (None for older runs)."""
+        path = self.path / INPUTS_FILE
+        if not path.exists():
+            return None
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+            raise RunError(f"{path}: damaged ({getattr(error, 'msg', error)})") from None
+        if not isinstance(data, dict) or not {"task", "overrides", "fingerprint", "task_file"} <= set(data):
+            raise RunError(f"{path}: damaged (expected the keys task_file, task, overrides, fingerprint)")
+        return data
 
     def task(self) -> Task:
         return load_task(self.path / TASK_FILE)
@@ -98,28 +140,42 @@ class RunDirectory:
         return _load_models(self.path, BEST_MODEL_FILE)
 
     def summary(self) -> dict[str, Any]:
+        path = self.path / SUMMARY_FILE
         try:
-            return json.loads((self.path / SUMMARY_FILE).read_text())
+            data = json.loads(path.read_text())
+        except (OSError, UnicodeDecodeError) as error:
+            raise RunError(f"{path}: cannot read ({error})") from None
         except json.JSONDecodeError as error:
-            raise ConfigError(f"{self.path / SUMMARY_FILE}: not valid JSON ({error.msg})") from None
+            raise RunError(f"{path}:{error.lineno}: not valid JSON ({error.msg})") from None
+        if not isinstance(data, dict) or not _finite(data.get("initial_robustness")):
+            raise RunError(f"{path}: damaged (no finite 'initial_robustness')")
+        return data
 
     def trials(self) -> list[Trial]:
-        """The finished trials; a last line cut short by a kill is removed from the file."""
+        """The finished trials, checked: numbered 1, 2, ... and with finite values. A last line
+        cut short by a kill is removed from the file; anything else damaged is a RunError."""
         path = self.path / TRIALS_FILE
-        text = path.read_text()
+        try:
+            text = path.read_text()
+        except (OSError, UnicodeDecodeError) as error:
+            raise RunError(f"{path}: cannot read ({error})") from None
         lines = text.split("\n")
         complete, trials = [], []
         for number, line in enumerate(lines, start=1):
             if not line.strip():
                 continue
             try:
-                trials.append(_trial_from_json(json.loads(line)))
-            except (json.JSONDecodeError, KeyError, TypeError):
-                if number < len(lines) - 1:  # not the last line: the file was edited, not killed
-                    raise ConfigError(f"{path}:{number}: not a trial record") from None
+                trial = _trial_from_json(json.loads(line))
+            except (json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError):
+                if number < len(lines) - 1 or text.endswith("\n"):  # a whole line: edited, not killed
+                    raise RunError(f"{path}:{number}: damaged (not a trial record)") from None
                 break
+            problem = _trial_problem(trial, len(trials) + 1)
+            if problem:
+                raise RunError(f"{path}:{number}: damaged ({problem})")
+            trials.append(trial)
             complete.append(line)
-        if len(complete) != sum(1 for line in lines if line.strip()):
+        if self.lock is not None and len(complete) != sum(1 for line in lines if line.strip()):
             write_atomically(path, "".join(line + "\n" for line in complete))
         return trials
 
@@ -149,6 +205,65 @@ class RunDirectory:
 def _model_file(base: str, skill: str) -> str:
     """`model.npz` for the single skill, `model-NAME.npz` for a skill of a behaviour."""
     return base if skill == SINGLE_SKILL else base.replace(".npz", f"-{skill}.npz")
+
+
+class RunLock:
+    """An exclusive advisory lock (`flock`) on a run directory's `.lock`, which names the holder's
+    PID. The kernel drops it when the process ends, however it ends."""
+
+    def __init__(self, stream: Any) -> None:
+        self.stream = stream
+
+    @classmethod
+    def acquire(cls, folder: Path, shown: Path) -> "RunLock":
+        try:
+            stream = open(folder / LOCK_FILE, "a+")
+        except OSError as error:
+            raise RunError(f"{shown}: cannot write to the run directory ({error.strerror or error})") from None
+        try:
+            fcntl.flock(stream.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            stream.seek(0)
+            holder = stream.read().strip() or "unknown"
+            stream.close()
+            raise RunError(f"{shown}: the run is being written by another stlopt process (PID {holder}); wait for it to end or stop it") from None
+        stream.seek(0)
+        stream.truncate()
+        stream.write(f"{os.getpid()}\n")
+        stream.flush()
+        return cls(stream)
+
+    def release(self) -> None:
+        if not self.stream.closed:
+            fcntl.flock(self.stream.fileno(), fcntl.LOCK_UN)
+            self.stream.close()
+
+
+def check_new_run_path(path: Path) -> None:
+    """Refuse, before any work, a run path that exists (and is not an empty folder) or cannot
+    be created and written."""
+    if path.exists() and (not path.is_dir() or any(path.iterdir())):
+        raise RunError(f"{path}: the run directory exists; continue it with --resume or choose another with --out")
+    check_output_folder(path, "run directory")
+
+
+def _finite(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _trial_problem(trial: Trial, expected_number: int) -> str:
+    """What is wrong with a parsed trial record, or ''."""
+    if trial.trial != expected_number:
+        return f"trial {trial.trial} where trial {expected_number} was expected"
+    if trial.status not in ("ok", "failed"):
+        return f"status {trial.status!r}"
+    if trial.robustness is not None and not math.isfinite(trial.robustness):
+        return f"robustness {trial.robustness}"
+    if (trial.robustness is None) != (trial.status == "failed"):
+        return "a failed trial has a robustness, or a finished one has none"
+    if trial.x.ndim != 1 or not np.all(np.isfinite(trial.x)):
+        return "its point x is not a list of finite numbers"
+    return ""
 
 
 def _load_models(folder: Path, base: str) -> dict[str, HSMM]:
@@ -211,16 +326,25 @@ def trial_skill(path: Path, which: str = "best") -> TrialSkill:
     task, models, trials = run.task(), run.models(), run.trials()
     if which == "best":
         number = run.summary().get("best_trial") or 0
+        if number == 0:
+            raise RunError(f"{path}: the run has no successful trial yet; replay the unoptimised skill with --trial initial")
     elif which == "initial":
         number = 0
     else:
-        try:
-            number = int(which)
-        except ValueError:
-            raise ConfigError(f"--trial must be 'best', 'initial' or a trial number (got {which!r})") from None
+        number = _trial_number(which, len(trials), path)
     if number > 0:
         found = [trial for trial in trials if trial.trial == number]
-        if not found:
-            raise ConfigError(f"{path}: no trial {number} (the run has {len(trials)} finished trials)")
         models = build_search_space(models, task.parameters, task.source).apply(models, found[0].x)
     return TrialSkill(number, models, task.behaviour, task.spec, task.scene, task.duration, task.semantics, task.nu)
+
+
+def _trial_number(which: str, finished: int, path: Path) -> int:
+    """`--trial` as a number from 1 to the run's finished trials."""
+    try:
+        number = int(which)
+    except ValueError:
+        raise ConfigError(f"--trial must be 'best', 'initial' or a trial number (got {which!r})") from None
+    if not 1 <= number <= finished:
+        have = f"trials 1 to {finished}" if finished else "no finished trials"
+        raise RunError(f"{path}: no trial {number} (the run has {have}; 'initial' is the unoptimised skill)")
+    return number

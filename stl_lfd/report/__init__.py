@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from stl_lfd.errors import ConfigError
+from stl_lfd.files import atomic_output, check_output_folder
 
 
 def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (), gp_parameters: list[str] | None = None) -> tuple[Path, list[Path]]:
@@ -18,12 +19,13 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
     from stl_lfd.report.html import write_index
     from stl_lfd.report.run_data import load_run
 
+    out = check_output_folder(Path(out) if out is not None else Path(run_dir) / "report", "report folder")
     run = load_run(run_dir)
+    others = [load_run(path) for path in compare]
     if gp_parameters:
         unknown = [name for name in gp_parameters if name not in run.space.names]
         if unknown:
             raise ConfigError(f"--gp-parameter {unknown[0]} is not a parameter of the run ({', '.join(run.space.names)})")
-    out = Path(out) if out is not None else Path(run_dir) / "report"
     out.mkdir(parents=True, exist_ok=True)
     made = [
         ("trajectories", "End-effector paths of all trials (x-y), the best in red", figures.trajectories(run)),
@@ -36,13 +38,14 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
         ("forces", "Contact force per trial", figures.contact_forces(run)),
     ]
     if compare:
-        runs = [run] + [load_run(path) for path in compare]
+        runs = [run] + others
         made.append(("compare", "Best so far: " + " vs ".join(str(r.path.name) for r in runs), figures.compare_runs(runs)))
     written = []
     for name, title, figure in made:
         if figure is None:
             continue
         path = out / f"{name}.png"
-        figure.savefig(path, dpi=100)
+        with atomic_output(path) as temporary:
+            figure.savefig(temporary, dpi=100)
         written.append((title, path))
     return write_index(run, written, out), [path for _, path in written]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
+from stl_lfd.files import write_atomically
 from stl_lfd.report.run_data import RunData
 
 
@@ -50,5 +51,5 @@ figure{{margin:2em 0;}} figcaption{{color:#555;}}</style></head>
 </body></html>
 """
     path = out / "index.html"
-    path.write_text(page)
+    write_atomically(path, page)
     return path

@@ -28,10 +28,13 @@ class Node:
         return ()
 
     def walk(self) -> Iterator["Node"]:
-        """This node and all its descendants, depth first."""
-        yield self
-        for child in self.children():
-            yield from child.walk()
+        """This node and all its descendants, depth first (without recursion, so that deep
+        formulas cannot exhaust the stack)."""
+        stack: list[Node] = [self]
+        while stack:
+            node = stack.pop()
+            yield node
+            stack.extend(reversed(node.children()))
 
 
 # --- Arithmetic expressions ---------------------------------------------------------------

@@ -78,7 +78,37 @@ def _read(path: Path, shown: str) -> str:
         raise SpecError(f"cannot read the specification: {error}", shown) from None
 
 
+MAX_DEPTH = 200  # operator nesting, through defined names; deeper formulas are refused
+
+
 def _parse(text: str, source: str, base_dir: Path, including: tuple[Path, ...]) -> ast.Spec:
+    try:
+        spec = _parse_checked(text, source, base_dir, including)
+    except RecursionError:
+        spec = None
+    if spec is None or nesting_depth(spec) > MAX_DEPTH:
+        raise StlSyntaxError(f"the specification nests more than {MAX_DEPTH} levels deep (counting through its definitions); simplify it", source)
+    return spec
+
+
+def nesting_depth(spec: ast.Spec) -> int:
+    """How deeply the specification's formula nests operators once its names are inlined,
+    counted without recursion (names must not be recursive: see `_check_names`)."""
+    definitions = {definition.name: definition.formula for definition in spec.definitions}
+    depth: dict[int, int] = {}
+    stack: list[tuple[ast.Node, bool]] = [(spec.formula, False)]
+    while stack:
+        node, expanded = stack.pop()
+        below = [definitions[node.name]] if isinstance(node, ast.Ref) else list(node.children())
+        if expanded:
+            depth[id(node)] = (0 if isinstance(node, ast.Ref) else 1) + max((depth[id(child)] for child in below), default=0)
+        elif id(node) not in depth:
+            stack.append((node, True))
+            stack.extend((child, False) for child in below if id(child) not in depth)
+    return depth[id(spec.formula)]
+
+
+def _parse_checked(text: str, source: str, base_dir: Path, including: tuple[Path, ...]) -> ast.Spec:
     try:
         tree = _parser().parse(text)
         includes, definitions, formula = _ToAst(source).transform(tree)

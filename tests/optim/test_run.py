@@ -30,7 +30,7 @@ def test_a_run_writes_its_directory_as_it_goes(tmp_path, learned_model_file):
     task = load_task(small_task(tmp_path, learned_model_file))
     summary = optimise(start_run(task, tmp_path / "run"))
     run = tmp_path / "run"
-    assert {path.name for path in run.iterdir()} == {"task.yaml", "model.npz", "trials.jsonl", "signals", "best_model.npz", "summary.json"}
+    assert {path.name for path in run.iterdir()} == {"task.yaml", "inputs.json", ".lock", "model.npz", "trials.jsonl", "signals", "best_model.npz", "summary.json"}
     lines = (run / "trials.jsonl").read_text().splitlines()
     assert len(lines) == 5
     first = json.loads(lines[0])
@@ -88,9 +88,9 @@ def test_cli_optimize_prints_the_summary_and_protects_existing_runs(tmp_path, le
     assert summary["trials"] == 4 and summary["initial_trials"] == 2 and summary["seed"] == 5
     assert "unoptimised skill: robustness" in result.stderr and "4/5" not in result.stderr
     again = runner.invoke(app, ["optimize", str(task), "--out", str(out)])
-    assert again.exit_code == 5 and "exists; continue it with --resume" in again.stderr
+    assert again.exit_code == 9 and "exists; continue it with --resume" in again.stderr
     changed = runner.invoke(app, ["optimize", str(task), "--out", str(out), "--resume", "--seed", "1"])
-    assert changed.exit_code == 5 and "--seed cannot change on --resume" in changed.stderr
+    assert changed.exit_code == 9 and "--seed cannot change on --resume" in changed.stderr
     extended = runner.invoke(app, ["optimize", str(task), "--out", str(out), "--resume", "--iterations", "5"])
     assert extended.exit_code == 0, extended.stderr
     assert json.loads(extended.stdout)["trials"] == 5
@@ -106,7 +106,7 @@ def test_replay_of_a_run_uses_its_spec_and_best_trial(tmp_path, learned_model_fi
     assert result.exit_code == 0, result.stderr
     assert video.exists() and "new robustness of" in result.stderr
     missing = runner.invoke(app, ["replay", str(out), "--trial", "9", "--video", str(video)])
-    assert missing.exit_code == 5 and "no trial 9" in missing.stderr
+    assert missing.exit_code == 9 and "no trial 9" in missing.stderr
     assert summary["best_trial"] is not None
 
 

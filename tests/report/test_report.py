@@ -70,7 +70,7 @@ def test_forces_and_comparison_when_the_data_is_there(run_dir, tmp_path):
 
 def test_report_errors_are_one_line(run_dir, tmp_path):
     missing = runner.invoke(app, ["report", str(tmp_path / "nothing")])
-    assert missing.exit_code == 5 and "not a run directory" in missing.stderr
+    assert missing.exit_code == 9 and "no such run directory" in missing.stderr
     bad = runner.invoke(app, ["report", str(run_dir), "--out", str(tmp_path / "r"), "--gp-parameter", "mean[9].q"])
     assert bad.exit_code == 5 and "is not a parameter of the run" in bad.stderr
 

@@ -43,7 +43,7 @@ def test_rollout_to_a_file(learned_model_file, tmp_path):
         (["rollout", "{model}", "--rate", "0"], 6, "--rate must be positive"),
         (["rollout", "{model}", "--backend", "mujoco"], 2, "mujoco"),
         (["replay", "missing.npz", "--video", "x.gif"], 5, "no such model file or run directory"),
-        (["replay", "{model}", "--video", "x.avi"], 7, "must be .mp4 or .gif"),
+        (["replay", "{model}", "--video", "x.avi"], 8, "must end in .mp4 or .gif"),
     ],
 )
 def test_bad_input_gives_one_error_line(learned_model_file, arguments, code, message):

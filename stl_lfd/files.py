@@ -1,0 +1,96 @@
+"""Output files: checked before any work, written atomically, never left half-written.
+
+Every command checks its output paths first (`check_output_file`, `check_output_folder`), so a
+typo in `-o` fails in a second rather than after minutes of learning or simulation. Every file
+is then written through `atomic_output`: a temporary file beside the target, renamed into place
+when complete and removed on any failure, so a crash or Ctrl-C leaves the old file (or none).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator
+
+from stl_lfd.errors import OutputError
+
+
+def check_output_file(path: Path | str, suffixes: tuple[str, ...] = (), what: str = "output file") -> Path:
+    """`path` as a Path, after checking that a file can be written there.
+
+    Args:
+        suffixes: accepted suffixes (lower case, with the dot); empty accepts any.
+
+    Raises:
+        OutputError: naming the path and the problem.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise OutputError(f"{path}: is a folder; give a file name for the {what}")
+    if suffixes and path.suffix.lower() not in suffixes:
+        raise OutputError(f"{path}: the {what} must end in {_either(suffixes)}")
+    folder = path.parent
+    if not folder.is_dir():
+        problem = "is a file" if folder.exists() else "does not exist"
+        raise OutputError(f"{path}: cannot write the {what}: the folder {folder} {problem}")
+    if not os.access(folder, os.W_OK | os.X_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        raise OutputError(f"{path}: cannot write the {what}: permission denied")
+    return path
+
+
+def check_output_folder(path: Path | str, what: str = "output folder") -> Path:
+    """`path` as a Path, after checking that it is (or can be created as) a writable folder."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise OutputError(f"{path}: is a file; the {what} must be a folder")
+    existing = path
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise OutputError(f"{path}: cannot create the {what}: {existing} is a file")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise OutputError(f"{path}: cannot write the {what}: {existing} is not writable (permission denied)")
+    return path
+
+
+@contextmanager
+def atomic_output(path: Path | str) -> Iterator[Path]:
+    """A temporary path beside `path` to write to; renamed to `path` when the block succeeds,
+    removed when it fails. The file gets the permissions of an ordinary new file (umask)."""
+    path = Path(path)
+    descriptor, name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
+    os.close(descriptor)
+    temporary = Path(name)
+    try:
+        yield temporary
+        os.chmod(temporary, 0o666 & ~_umask())
+        os.replace(temporary, path)
+    except OSError as error:
+        temporary.unlink(missing_ok=True)
+        raise OutputError(f"{path}: cannot write ({error.strerror or error})") from None
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+
+
+def write_atomically(path: Path | str, text: str) -> None:
+    """Write `text` to `path` so that `path` is never half-written."""
+    with atomic_output(path) as temporary:
+        temporary.write_text(text)
+
+
+def folder_mode() -> int:
+    """The permissions of an ordinary new folder under the current umask."""
+    return 0o777 & ~_umask()
+
+
+def _either(suffixes: tuple[str, ...]) -> str:
+    return suffixes[0] if len(suffixes) == 1 else f"{', '.join(suffixes[:-1])} or {suffixes[-1]}"
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
