@@ -24,7 +24,7 @@ from stl_lfd.execution import reference_of
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
 from stl_lfd.sim import Reference
 from stl_lfd.sim.panda import TIME_STEP
-from stl_lfd.yamlfile import check_keys, integer, number, read_yaml
+from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
 ACTIONS = ("grasp", "release")
 DEFAULT_SETTLE = 1.0
@@ -79,7 +79,7 @@ def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:
     if isinstance(item, dict) and "action" in item:
         check_keys(item, ("action", "seconds"), path, where)
         if item["action"] not in ACTIONS:
-            raise ConfigError(f"{path}: '{where}.action' must be one of {', '.join(ACTIONS)} (got {item['action']!r})")
+            raise ConfigError(f"{path}: '{where}.action' must be one of {', '.join(ACTIONS)} (got {shown(item['action'])})")
         return ActionStep(item["action"], number(item.get("seconds", 1.0), path, f"{where}.seconds", positive=True))
     check_keys(item, ("skill", "demos", "model", "states", "settle"), path, where, required=("skill",))
     if ("demos" in item) == ("model" in item):

@@ -18,15 +18,25 @@ from pathlib import Path
 from typing import Iterator, Optional
 
 import typer
+from typer.core import TyperArgument, TyperCommand
 
 from stl_lfd import __version__
 from stl_lfd.errors import ExecutionError, ModelError, StlLfdError
+
+class _PlainUsage(TyperCommand):
+    """Usage lines in the usual form, `stlopt optimize [OPTIONS] TASK_FILE`, which a user can copy."""
+
+    def collect_usage_pieces(self, ctx: typer.Context) -> list[str]:
+        arguments = [param.metavar or param.name.upper() for param in self.get_params(ctx) if isinstance(param, TyperArgument)]
+        return [self.options_metavar] + arguments
+
 
 app = typer.Typer(
     help="Adapt demonstrated robot skills to Signal Temporal Logic requirements.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 
@@ -92,10 +102,10 @@ def _root(
     """Adapt demonstrated robot skills to Signal Temporal Logic requirements."""
 
 
-@app.command()
+@app.command(cls=_PlainUsage)
 def robustness(
-    spec: Path = typer.Argument(..., help="STL specification file (.stl)."),
-    signal_csv: str = typer.Argument(..., help="Signal CSV with a time column t; '-' reads stdin."),
+    spec: Path = typer.Argument(..., metavar="SPEC", help="STL specification file (.stl)."),
+    signal_csv: str = typer.Argument(..., metavar="SIGNAL_CSV", help="Signal CSV with a time column t; '-' reads stdin."),
     semantics: SemanticsOption = typer.Option(SemanticsOption.classic, help="classic space robustness or the paper's new robustness."),
     nu: float = typer.Option(1.0, help="Sharpness of the new robustness (> 0); larger is closer to classic."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object instead of the bare number."),
@@ -107,6 +117,7 @@ def robustness(
 
     Example:
 
+    \b
         stlopt robustness specs/example.stl examples/s1.csv --semantics new --json
     """
     from stl_lfd.evaluate import evaluate_file
@@ -120,9 +131,9 @@ def robustness(
         print("satisfied" if result.satisfied else "violated", file=sys.stderr)
 
 
-@app.command()
+@app.command(cls=_PlainUsage)
 def learn(
-    demos_dir: Path = typer.Argument(..., help="Folder of demonstration CSVs (t,x,y,z[,...])."),
+    demos_dir: Path = typer.Argument(..., metavar="DEMOS_DIR", help="Folder of demonstration CSVs (t,x,y,z[,...])."),
     states: int = typer.Option(6, "-K", "--states", help="Number of HSMM states K."),
     output: Path = typer.Option(Path("model.npz"), "-o", "--output", help="Model file to write (.npz)."),
     sample_period: Optional[float] = typer.Option(None, "--sample-period", help="Resample the demos to this period in seconds (default: their median period, at most 50 Hz)."),
@@ -135,7 +146,8 @@ def learn(
 
     Example:
 
-        stlopt learn demos/three_regions -K 6 -o three_regions.npz --plot skill.png
+    \b
+        stlopt learn demos/three_regions -o three_regions.npz --plot skill.png
     """
     from stl_lfd.files import atomic_output, check_output_file
     from stl_lfd.hsmm import learn_from_folder, retrieve, save_model, summary_rows
@@ -166,9 +178,9 @@ def _print_summary(rows: list[dict], names: list[str]) -> None:
         print("\t".join(values))
 
 
-@app.command()
+@app.command(cls=_PlainUsage)
 def retrieve(
-    model_file: Path = typer.Argument(..., help="Model file written by 'stlopt learn'."),
+    model_file: Path = typer.Argument(..., metavar="MODEL_FILE", help="Model file written by 'stlopt learn'."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="CSV to write (default: stdout)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to retrieve (default: the model's expected duration)."),
     rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second of the output (default: the model's rate)."),
@@ -179,6 +191,7 @@ def retrieve(
 
     Example:
 
+    \b
         stlopt retrieve three_regions.npz --rate 240 -o reference.csv
     """
     from stl_lfd.files import check_output_file
@@ -190,8 +203,6 @@ def retrieve(
         if output is not None:
             check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
         model = load_model(model_file)
-        if rate is not None and not rate > 0:
-            raise ModelError(f"--rate must be positive (got {rate})")
         trajectory = retrieve_trajectory(model, duration, rate)
         columns = {name: trajectory.positions[:, index] for index, name in enumerate(trajectory.signal_names)}
         columns["state"] = trajectory.states + 1.0
@@ -200,9 +211,9 @@ def retrieve(
         print(f"wrote {output} ({trajectory.times.size} samples, {trajectory.times[-1]:.2f} s)", file=sys.stderr)
 
 
-@app.command()
+@app.command(cls=_PlainUsage)
 def rollout(
-    model_file: Path = typer.Argument(..., help="Model file written by 'stlopt learn'."),
+    model_file: Path = typer.Argument(..., metavar="MODEL_FILE", help="Model file written by 'stlopt learn'."),
     scene: str = typer.Option("free_space", help="Built-in scene name or a scene .yaml file."),
     backend: BackendOption = typer.Option(BackendOption.pybullet, help="pybullet simulates a Panda; kinematic records the reference itself."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="Signal CSV to write (default: stdout)."),
@@ -213,6 +224,7 @@ def rollout(
 
     Example:
 
+    \b
         stlopt rollout three_regions.npz | stlopt robustness specs/phi1.stl -
     """
     import time
@@ -243,16 +255,17 @@ def rollout(
 
 
 def _check_duration_and_rate(duration: Optional[float], rate: float) -> None:
-    if duration is not None and not duration > 0:
-        raise ModelError(f"--duration must be positive (got {duration})")
-    if not rate > 0:
-        raise ModelError(f"--rate must be positive (got {rate})")
+    from stl_lfd.limits import samples_problem
+
+    problem = samples_problem(duration if duration is not None else 1.0, rate)
+    if problem:
+        raise ModelError(f"--duration/--rate: {problem}")
 
 
-@app.command()
+@app.command(cls=_PlainUsage)
 def replay(
-    source: Path = typer.Argument(..., help="A model file, or a run directory written by 'stlopt optimize'."),
-    trial: str = typer.Option("best", "--trial", help="For a run directory: 'best' or a trial number."),
+    source: Path = typer.Argument(..., metavar="SOURCE", help="A model file, or a run directory written by 'stlopt optimize'."),
+    trial: str = typer.Option("best", "--trial", help="For a run directory: 'best', 'initial' (the unoptimised skill) or a trial number."),
     gui: bool = typer.Option(False, "--gui", help="Show the PyBullet GUI in real time (needs a display)."),
     video: Optional[Path] = typer.Option(None, "--video", help="Record a video (.mp4 or .gif) headless."),
     spec: Optional[Path] = typer.Option(None, "--spec", help="STL spec to evaluate and whose regions to draw (a run directory knows its own)."),
@@ -268,8 +281,8 @@ def replay(
 
     Examples:
 
+    \b
         stlopt replay runs/phi1 --trial best --video best.mp4
-
         stlopt replay three_regions.npz --spec specs/phi1.stl --gui
     """
     import os
@@ -296,9 +309,9 @@ class MethodOption(str, Enum):
     random = "random"
 
 
-@app.command()
+@app.command(cls=_PlainUsage)
 def optimize(
-    task_file: Path = typer.Argument(..., help="Task file (YAML), e.g. configs/phi1.yaml."),
+    task_file: Path = typer.Argument(..., metavar="TASK_FILE", help="Task file (YAML), e.g. configs/phi1.yaml."),
     spec: Optional[Path] = typer.Option(None, "--spec", help="Use this STL spec instead of the task's."),
     iterations: Optional[int] = typer.Option(None, "--iterations", "-N", help="Total number of trials N (default: the task's)."),
     init: Optional[int] = typer.Option(None, "--init", "-M", help="Random (Sobol) initial trials M (default: the task's)."),
@@ -318,9 +331,9 @@ def optimize(
 
     Examples:
 
+    \b
         stlopt optimize configs/phi1.yaml --seed 3 --out runs/phi1-seed3
-
-        stlopt optimize configs/phi1.yaml --out runs/phi1-seed3 --resume --iterations 48
+        stlopt optimize configs/phi1.yaml --out runs/phi1-seed3 --resume -N 48
     """
     from stl_lfd.optim import load_task, optimise, resume_run, start_run
     from stl_lfd.optim.resume import inputs_record
@@ -343,9 +356,9 @@ def optimize(
     print(json.dumps(summary, indent=2))
 
 
-@app.command()
+@app.command(cls=_PlainUsage)
 def report(
-    run_dir: Path = typer.Argument(..., help="Run directory written by 'stlopt optimize'."),
+    run_dir: Path = typer.Argument(..., metavar="RUN_DIR", help="Run directory written by 'stlopt optimize'."),
     out: Optional[Path] = typer.Option(None, "--out", help="Folder for the figures and index.html (default: RUN_DIR/report)."),
     compare: list[Path] = typer.Option([], "--compare", help="Another run directory to compare best-so-far robustness with (repeatable)."),
     gp_parameter: list[str] = typer.Option([], "--gp-parameter", help="Parameter for the GP slice figure, e.g. 'mean[3].x' (repeatable; default: the two most relevant)."),
@@ -358,6 +371,7 @@ def report(
 
     Example:
 
+    \b
         stlopt report runs/phi1 --compare runs/phi1-random
     """
     from stl_lfd.report import write_report

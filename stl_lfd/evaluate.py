@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from stl_lfd.errors import SpecError
+from stl_lfd.errors import SignalError, SpecError
 from stl_lfd.signals import SignalTable, read_signal_csv
 from stl_lfd.stl import compile_spec, load_spec
 
@@ -60,6 +60,8 @@ def evaluate_table(spec_path: str | Path, table: SignalTable, semantics: str = "
         value = function(table.columns, table.times)
     except SpecError as error:
         raise error.located(error.source) from None
+    except SignalError as error:
+        raise SignalError(f"{table.source}: {error}") from None
     return Evaluation(
         spec=str(spec_path),
         signal=table.source,

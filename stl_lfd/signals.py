@@ -96,15 +96,17 @@ def write_signal_csv(table: SignalTable, destination: str | Path | TextIO) -> No
 
 def _read_text(path: str | Path, shown: str) -> str:
     if str(path) == "-":
-        return sys.stdin.read()
+        return sys.stdin.read().removeprefix("\ufeff")
     try:
-        return Path(path).read_text()
+        return Path(path).read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise SignalError(f"{shown}: no such file") from None
     except IsADirectoryError:
         raise SignalError(f"{shown}: is a folder, expected a CSV file") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise SignalError(f"{shown}: cannot read the file ({error})") from None
+    except UnicodeDecodeError:
+        raise SignalError(f"{shown}: not a text file (it is not UTF-8); expected a CSV file") from None
+    except OSError as error:
+        raise SignalError(f"{shown}: cannot read the file ({error.strerror or error})") from None
 
 
 def _check_header(header: list[str], required: tuple[str, ...], shown: str) -> None:

@@ -6,6 +6,7 @@ silently ignored setting.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -14,17 +15,58 @@ import yaml
 from stl_lfd.errors import ConfigError
 
 
+MAX_BYTES = 1_000_000  # task, scene and behaviour files are a few hundred bytes
+MAX_NODES = 100_000  # values after expanding aliases (`*name`), against alias bombs
+
+
+class _Loader(yaml.SafeLoader):
+    """The safe loader, with duplicate keys refused and `1e9` read as a number (YAML 1.1 needs
+    a dot, `1.0e9`, and would give the string '1e9')."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        seen: dict[Any, int] = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            if isinstance(key, (str, int, float, bool)) and key in seen:
+                raise yaml.constructor.ConstructorError(None, None, f"duplicate key '{key}' (first on line {seen[key]})", key_node.start_mark)
+            if isinstance(key, (str, int, float, bool)):
+                seen[key] = key_node.start_mark.line + 1
+        return super().construct_mapping(node, deep)
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
 def read_yaml(path: Path | str) -> dict[str, Any]:
-    """The top-level mapping of a YAML file; ConfigError for a missing file or bad YAML."""
+    """The top-level mapping of a YAML file; ConfigError for a missing, huge or bad file."""
     path = Path(path)
     try:
-        text = path.read_text()
+        if path.stat().st_size > MAX_BYTES:
+            raise ConfigError(f"{path}: the file is larger than {MAX_BYTES // 1000} kB; is it the right file?")
+        text = path.read_text(encoding="utf-8-sig")
+    except IsADirectoryError:
+        raise ConfigError(f"{path}: is a folder, expected a YAML file") from None
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such file") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"{path}: not a text file (it is not UTF-8)") from None
     except OSError as error:
         raise ConfigError(f"{path}: cannot read ({error.strerror or error})") from None
     try:
-        data = yaml.safe_load(text)
+        loader = _Loader(text)
+        try:
+            root = loader.get_single_node()
+            if root is not None and _expanded_size(root) > MAX_NODES:
+                raise ConfigError(f"{path}: its aliases expand to more than {MAX_NODES} values; write the settings out")
+            data = loader.construct_document(root) if root is not None else None
+        finally:
+            loader.dispose()
     except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
+        mark = getattr(error, "problem_mark", None) or getattr(error, "context_mark", None)
         where = f":{mark.line + 1}:{mark.column + 1}" if mark is not None else ""
         problem = getattr(error, "problem", None) or str(error)
         raise ConfigError(f"{path}{where}: invalid YAML ({problem})") from None
@@ -35,6 +77,36 @@ def read_yaml(path: Path | str) -> dict[str, Any]:
     return data
 
 
+def _expanded_size(root: yaml.Node) -> int:
+    """The number of values the document has once every alias is expanded (shared nodes
+    counted once per use), computed without expanding anything."""
+    size: dict[int, int] = {}
+    stack: list[tuple[yaml.Node, bool]] = [(root, False)]
+    while stack:
+        node, expanded = stack.pop()
+        children = _children(node)
+        if expanded:
+            size[id(node)] = min(1 + sum(size.get(id(child), 1) for child in children), MAX_NODES + 1)
+        elif id(node) not in size:
+            stack.append((node, True))
+            stack.extend((child, False) for child in children if id(child) not in size)
+    return size[id(root)]
+
+
+def _children(node: yaml.Node) -> list[yaml.Node]:
+    if isinstance(node, yaml.MappingNode):
+        return [item for pair in node.value for item in pair]
+    if isinstance(node, yaml.SequenceNode):
+        return list(node.value)
+    return []
+
+
+def shown(value: Any, limit: int = 60) -> str:
+    """`repr(value)` for a message, cut to `limit` characters."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def check_keys(mapping: Any, allowed: Iterable[str], path: Path | str, where: str = "", required: Iterable[str] = ()) -> dict[str, Any]:
     """`mapping` itself, after checking that it is a mapping with known keys and the required ones."""
     label = f"{path}: {where}" if where else f"{path}:"
@@ -43,7 +115,7 @@ def check_keys(mapping: Any, allowed: Iterable[str], path: Path | str, where: st
     allowed = list(allowed)
     for key in mapping:
         if key not in allowed:
-            raise ConfigError(f"{path}: unknown key '{_join(where, key)}' (known: {', '.join(allowed)})")
+            raise ConfigError(f"{path}: unknown key '{_join(where, shown(key)[1:-1] if isinstance(key, str) else shown(key))}' (known: {', '.join(allowed)})")
     for key in required:
         if key not in mapping:
             raise ConfigError(f"{path}: missing key '{_join(where, key)}'")
@@ -53,7 +125,7 @@ def check_keys(mapping: Any, allowed: Iterable[str], path: Path | str, where: st
 def number(value: Any, path: Path | str, key: str, positive: bool = False, minimum: float | None = None) -> float:
     """`value` as a float, with a ConfigError naming `key` when it is not a (positive) number."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ConfigError(f"{path}: '{key}' must be a number (got {value!r})")
+        raise ConfigError(f"{path}: '{key}' must be a number (got {shown(value)})")
     value = float(value)
     if value != value or value in (float("inf"), float("-inf")):
         raise ConfigError(f"{path}: '{key}' must be finite (got {value})")
@@ -64,19 +136,24 @@ def number(value: Any, path: Path | str, key: str, positive: bool = False, minim
     return value
 
 
-def integer(value: Any, path: Path | str, key: str, minimum: int | None = None) -> int:
-    """`value` as an int, with a ConfigError naming `key` otherwise."""
+def integer(value: Any, path: Path | str, key: str, minimum: int | None = None, maximum: int | None = None) -> int:
+    """`value` as an int (a whole float such as `1e3` counts), with a ConfigError naming `key`
+    otherwise."""
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)
     if isinstance(value, bool) or not isinstance(value, int):
-        raise ConfigError(f"{path}: '{key}' must be an integer (got {value!r})")
+        raise ConfigError(f"{path}: '{key}' must be an integer (got {shown(value)})")
     if minimum is not None and value < minimum:
         raise ConfigError(f"{path}: '{key}' must be at least {minimum} (got {value})")
+    if maximum is not None and value > maximum:
+        raise ConfigError(f"{path}: '{key}' must be at most {maximum} (got {shown(value)})")
     return value
 
 
 def vector(value: Any, length: int, path: Path | str, key: str) -> tuple[float, ...]:
     """`value` as a tuple of `length` finite floats."""
     if not isinstance(value, (list, tuple)) or len(value) != length:
-        raise ConfigError(f"{path}: '{key}' must be a list of {length} numbers (got {value!r})")
+        raise ConfigError(f"{path}: '{key}' must be a list of {length} numbers (got {shown(value)})")
     return tuple(number(item, path, f"{key}[{index}]") for index, item in enumerate(value))
 
 

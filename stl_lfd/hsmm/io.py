@@ -39,8 +39,15 @@ def load_model(path: str | Path) -> HSMM:
             fields = {name: data[name] for name in data.files}
     except FileNotFoundError:
         raise ModelError(f"{path}: no such model file") from None
-    except (OSError, ValueError, zipfile.BadZipFile) as error:
-        raise ModelError(f"{path}: not a model file ({error})") from None
+    except IsADirectoryError:
+        raise ModelError(f"{path}: is a folder, not a model file") from None
+    except EOFError:
+        raise ModelError(f"{path}: not a model file (it is empty)") from None
+    except ValueError as error:
+        kind = "it holds Python objects" if "allow_pickle" in str(error) and zipfile.is_zipfile(path) else "not an .npz archive"
+        raise ModelError(f"{path}: not a model file ({kind}); write one with stlopt learn") from None
+    except (OSError, zipfile.BadZipFile):
+        raise ModelError(f"{path}: not a model file (not an .npz archive); write one with stlopt learn") from None
     if str(fields.get("format", "")) != FORMAT:
         raise ModelError(f"{path}: not an stlopt model file (no '{FORMAT}' marker)")
     version = int(fields["format_version"])

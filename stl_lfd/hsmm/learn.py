@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +10,7 @@ import numpy as np
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm.demos import load_demos, median_period, resample
 from stl_lfd.hsmm.model import HSMM
+from stl_lfd.limits import MAX_STATES, samples_problem
 
 # Demonstrations are resampled no finer than this (s): hand-guided motions have no content
 # above a few hertz, and EM, state sequences and tracking all cost time per sample.
@@ -24,12 +26,16 @@ def learn_from_folder(folder: str | Path, n_states: int = 6, sample_period: floa
     Returns:
         the fitted model and the resampled demonstrations (`T_i x D` each).
     """
-    if n_states < 1:
-        raise ModelError(f"K must be at least 1 (got {n_states})")
+    if not 1 <= n_states <= MAX_STATES:
+        raise ModelError(f"K must be from 1 to {MAX_STATES} (got {n_states})")
+    if sample_period is not None and not (math.isfinite(sample_period) and sample_period > 0):
+        raise ModelError(f"the sample period must be a positive number of seconds (got {sample_period:g})")
     demos = load_demos(folder)
     period = max(median_period(demos), COARSEST_DEFAULT_PERIOD) if sample_period is None else sample_period
-    if not period > 0:
-        raise ModelError(f"the sample period must be positive (got {period})")
+    longest = max(demos, key=lambda demo: demo.duration)
+    problem = samples_problem(longest.duration, 1.0 / period)
+    if problem:
+        raise ModelError(f"{longest.source}: cannot resample to a period of {period:g} s: {problem}")
     sequences = [resample(demo, period) for demo in demos]
     shortest = min(len(sequence) for sequence in sequences)
     if shortest < 2 * n_states:

@@ -14,6 +14,7 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 
 from stl_lfd.errors import ModelError
+from stl_lfd.limits import samples_problem
 from stl_lfd.hsmm import lqt
 from stl_lfd.hsmm.model import HSMM
 
@@ -60,8 +61,9 @@ def retrieve(
     """
     dt = model.sample_period_
     duration = model.expected_duration() if duration is None else float(duration)
-    if not duration > 0:
-        raise ModelError(f"the retrieval duration must be positive (got {duration})")
+    problem = samples_problem(duration, 1.0 / dt) or (samples_problem(duration, float(rate)) if rate is not None else "")
+    if problem:
+        raise ModelError(f"cannot retrieve the skill: {problem}")
     steps = int(round(duration / dt)) + 1
     states = model.state_sequence(steps)
     dimension = model.n_features

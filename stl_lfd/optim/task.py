@@ -12,7 +12,8 @@ from pathlib import Path
 from typing import Any
 
 from stl_lfd.errors import ConfigError
-from stl_lfd.yamlfile import check_keys, integer, number, read_yaml
+from stl_lfd.limits import MAX_SEED, MAX_STATES, MAX_TRIALS, samples_problem
+from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
 METHODS = ("stl", "pi", "logei", "random")
 SINGLE_SKILL = "skill"  # the name of the one skill of a task without a behaviour
@@ -138,12 +139,12 @@ def load_task(path: str | Path) -> Task:
     semantics = _choice(data.get("semantics", "new"), SEMANTICS, path, "semantics")
     backend = _choice(data.get("backend", "pybullet"), ("pybullet", "kinematic"), path, "backend")
     task = Task(
-        name=str(data.get("name", path.stem)),
+        name=_name(data.get("name", path.stem), path),
         spec=_existing(base, data["spec"], path, "spec"),
         model=_existing(base, data["model"], path, "model") if "model" in data else None,
         demos=_existing(base, data["demos"], path, "demos") if "demos" in data else None,
         behaviour=behaviour,
-        states=integer(data.get("states", 6), path, "states", minimum=1),
+        states=integer(data.get("states", 6), path, "states", minimum=1, maximum=MAX_STATES),
         scene=str(data.get("scene", _behaviour_scene(behaviour) if behaviour else "free_space")),
         backend=backend,
         semantics=semantics,
@@ -155,12 +156,20 @@ def load_task(path: str | Path) -> Task:
         source=path,
     )
     check_budget(task.optimizer, path)
+    problem = samples_problem(task.duration, task.rate)
+    if problem:
+        raise ConfigError(f"{path}: 'duration' and 'rate': {problem}")
     return task
 
 
 def check_budget(optimizer: Optimizer, path: Path) -> None:
+    """The budget and seed, from the file or the command line (--init, --iterations, --seed)."""
     if optimizer.initial < 1 or optimizer.trials < 1:
         raise ConfigError(f"{path}: 'optimizer.initial' and 'optimizer.trials' must be at least 1")
+    if optimizer.trials > MAX_TRIALS:
+        raise ConfigError(f"{path}: 'optimizer.trials' ({optimizer.trials}) is above the limit of {MAX_TRIALS} trials")
+    if not 0 <= optimizer.seed <= MAX_SEED:
+        raise ConfigError(f"{path}: 'optimizer.seed' must be from 0 to {MAX_SEED} (got {shown(optimizer.seed)})")
     if optimizer.initial > optimizer.trials:
         raise ConfigError(
             f"{path}: 'optimizer.initial' ({optimizer.initial}) exceeds 'optimizer.trials' ({optimizer.trials}), the total number of trials"
@@ -197,7 +206,7 @@ def _parameters(data: Any, path: Path, where: str) -> Parameters:
         coordinates = tuple(item.get("coordinates", COORDINATES))
         for coordinate in coordinates:
             if coordinate not in COORDINATES:
-                raise ConfigError(f"{path}: '{where}.means.coordinates' may hold x, y, z (got {coordinate!r})")
+                raise ConfigError(f"{path}: '{where}.means.coordinates' may hold x, y, z (got {shown(coordinate)})")
         means = MeanParameters(
             components=_components(item["components"], path, f"{where}.means.components", allow_all=False),
             coordinates=coordinates,
@@ -224,7 +233,7 @@ def _optimizer(data: Any, path: Path) -> Optimizer:
         method=_choice(data.get("method", defaults.method), METHODS, path, "optimizer.method"),
         initial=integer(data.get("initial", defaults.initial), path, "optimizer.initial", minimum=1),
         trials=integer(data.get("trials", defaults.trials), path, "optimizer.trials", minimum=1),
-        seed=integer(data.get("seed", defaults.seed), path, "optimizer.seed", minimum=0),
+        seed=integer(data.get("seed", defaults.seed), path, "optimizer.seed", minimum=0, maximum=MAX_SEED),
         xi=number(data.get("xi", defaults.xi), path, "optimizer.xi", minimum=0.0),
     )
 
@@ -234,22 +243,29 @@ def _components(value: Any, path: Path, key: str, allow_all: bool) -> tuple[int,
         return "all"
     if not isinstance(value, list) or not value:
         expected = "a non-empty list of state numbers" + (" or 'all'" if allow_all else "")
-        raise ConfigError(f"{path}: '{key}' must be {expected} (got {value!r})")
+        raise ConfigError(f"{path}: '{key}' must be {expected} (got {shown(value)})")
     numbers = tuple(integer(item, path, key, minimum=1) for item in value)
     if len(set(numbers)) != len(numbers):
         raise ConfigError(f"{path}: '{key}' lists a state twice ({list(numbers)})")
     return numbers
 
 
+def _name(value: Any, path: Path) -> str:
+    """The task's name: it names the default run directory, `runs/<name>`, so one plain word."""
+    if not isinstance(value, (str, int)) or not str(value).strip() or "/" in str(value) or str(value) in (".", ".."):
+        raise ConfigError(f"{path}: 'name' must be a plain name without '/' (got {shown(value)})")
+    return str(value)
+
+
 def _choice(value: Any, choices: tuple[str, ...], path: Path, key: str) -> str:
     if value not in choices:
-        raise ConfigError(f"{path}: '{key}' must be one of {', '.join(choices)} (got {value!r})")
+        raise ConfigError(f"{path}: '{key}' must be one of {', '.join(choices)} (got {shown(value)})")
     return value
 
 
 def _existing(base: Path, value: Any, path: Path, key: str) -> Path:
-    if not isinstance(value, str):
-        raise ConfigError(f"{path}: '{key}' must be a path (got {value!r})")
+    if not isinstance(value, str) or not value:
+        raise ConfigError(f"{path}: '{key}' must be a path (got {shown(value)})")
     resolved = Path(value) if Path(value).is_absolute() else base / value
     if not resolved.exists():
         raise ConfigError(f"{path}: '{key}' names {value}, which does not exist (paths are relative to the task file)")

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from stl_lfd.errors import ConfigError
-from stl_lfd.yamlfile import check_keys, number, read_yaml, vector
+from stl_lfd.yamlfile import check_keys, number, read_yaml, shown, vector
 
 SHAPES = ("box", "cylinder", "sphere")
 REGION_COLORS = ((0.2, 0.5, 0.9, 0.3), (0.9, 0.5, 0.2, 0.3), (0.3, 0.8, 0.3, 0.3), (0.8, 0.3, 0.7, 0.3))
@@ -192,7 +192,7 @@ def _parse_object(data: Any, path: Path, index: int) -> SceneObject:
     check_keys(data, keys, path, where, required=("name", "shape", "size", "position"))
     shape = data["shape"]
     if shape not in SHAPES:
-        raise ConfigError(f"{path}: '{where}.shape' must be one of {', '.join(SHAPES)} (got {shape!r})")
+        raise ConfigError(f"{path}: '{where}.shape' must be one of {', '.join(SHAPES)} (got {shown(shape)})")
     size_length = {"box": 3, "cylinder": 2, "sphere": 1}[shape]
     values: dict[str, Any] = {
         "name": str(data["name"]),

@@ -7,6 +7,7 @@ Entry points: `parse(text, source)` for text, `load_spec(path)` for files (which
 from __future__ import annotations
 
 import ast as python_ast
+import math
 from functools import cache
 from pathlib import Path
 
@@ -71,9 +72,13 @@ def resolve(spec: ast.Spec) -> ast.Formula:
 
 def _read(path: Path, shown: str) -> str:
     try:
-        return path.read_text()
+        return path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise SpecError("no such specification file", shown) from None
+    except IsADirectoryError:
+        raise SpecError("is a folder, not a specification file", shown) from None
+    except UnicodeDecodeError:
+        raise SpecError("not a text file (it is not UTF-8)", shown) from None
     except (OSError, UnicodeDecodeError) as error:
         raise SpecError(f"cannot read the specification: {error}", shown) from None
 
@@ -143,9 +148,8 @@ def _include(
     if path in including:
         raise StlNameError(f"circular include of '{include_path}'", source, line, 1).located(source, text)
     if not path.is_file():
-        raise StlNameError(f"included file '{include_path}' does not exist", source, line, 1).located(
-            source, text
-        )
+        problem = "is a folder, not a specification file" if path.is_dir() else "does not exist"
+        raise StlNameError(f"included file '{include_path}' {problem}", source, line, 1).located(source, text)
     shown = str(Path(source).parent / include_path) if source != "<string>" else include_path
     spec = _parse(_read(path, shown), shown, path.parent, including + (path,))
     return spec.definitions
@@ -320,7 +324,7 @@ class _ToAst(Transformer):
         return ast.Abs(self._expr(operand, meta))
 
     def number(self, meta, token: Token):
-        return ast.Const(float(token))
+        return ast.Const(self._finite(token))
 
     def name(self, meta, token: Token):
         return _Name(str(token), token.line, token.column, self.source)
@@ -336,8 +340,14 @@ class _ToAst(Transformer):
         return ast.Interval(lo[0], hi[0])
 
     def bound(self, meta, *tokens: Token):
-        value = float(tokens[-1]) * (-1.0 if str(tokens[0]) == "-" else 1.0)
+        value = self._finite(tokens[-1]) * (-1.0 if str(tokens[0]) == "-" else 1.0)
         return value, meta.line, meta.column
+
+    def _finite(self, token: Token) -> float:
+        value = float(token)
+        if not math.isfinite(value):
+            raise StlSyntaxError(f"the number {token} is too large (at most about 1.8e308)", self.source, token.line, token.column)
+        return value
 
     def _formula(self, node, meta) -> ast.Formula:
         if isinstance(node, _Name):

@@ -32,6 +32,7 @@ from stl_lfd.stl._numerics import (
     window_reduce,
 )
 from stl_lfd.stl.parser import resolve
+from stl_lfd.stl.printer import format_formula
 
 SemanticsName = Literal["classic", "new"]
 SEMANTICS: tuple[str, ...] = ("classic", "new")
@@ -43,6 +44,15 @@ UNIFORM_STEP_TOLERANCE = 0.01
 
 class HorizonWarning(UserWarning):
     """A formula looks further ahead than the trace lasts; windows are clipped at its end."""
+
+
+class CostWarning(UserWarning):
+    """An evaluation will take long: the new robustness of a bounded `G`/`F` costs one n-ary
+    conjunction per sample over its whole window, T x W operations."""
+
+
+# About 10 s of the new robustness on one core; above it the user is told what it will cost.
+COSTLY_OPERATIONS = 2e8
 
 
 @dataclass(frozen=True)
@@ -108,14 +118,20 @@ class Robustness:
             a float for a single trace, a `B` array for a batch.
         """
         trace, batched = self._prepare(signals, times)
-        values = self._evaluate(trace, 0, 1)[:, 0]
+        values = self._located(trace, 0, 1)[:, 0]
         return values if batched else float(values[0])
 
     def trace(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> np.ndarray:
         """The robustness signal at every sample: `T` or `B x T`."""
         trace, batched = self._prepare(signals, times)
-        values = self._evaluate(trace, 0, trace.length)
+        values = self._located(trace, 0, trace.length)
         return values if batched else values[0]
+
+    def _located(self, trace: _Trace, start: int, stop: int) -> np.ndarray:
+        try:
+            return self._evaluate(trace, start, stop)
+        except SpecError as error:
+            raise SpecError(error.message, self.source) from None
 
     def _prepare(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> tuple[_Trace, bool]:
         times = np.asarray(times, dtype=float)
@@ -143,7 +159,29 @@ class Robustness:
                 ),
                 stacklevel=3,
             )
+        self._warn_of_cost(times, batch)
         return _Trace(arrays, times - times[0], batch), batched
+
+    def _warn_of_cost(self, times: np.ndarray, batch: int) -> None:
+        if self.semantics.name != "new" or times.size < 2:
+            return
+        step = float(times[-1] - times[0]) / (times.size - 1)
+        windows = [
+            (node, min(times.size, (node.interval.hi - node.interval.lo) / step + 1))
+            for node in self.formula.walk()
+            if isinstance(node, (ast.Always, ast.Eventually)) and node.interval is not None
+        ]
+        operations = batch * times.size * sum(width for _, width in windows)
+        if operations > COSTLY_OPERATIONS:
+            node, width = max(windows, key=lambda item: item[1])
+            warnings.warn(
+                CostWarning(
+                    f"{self.source}: the new robustness of `{format_formula(node)}` on {times.size} samples takes about "
+                    f"{operations:.1e} operations (windows of up to {width:.0f} samples at every sample), "
+                    f"minutes; the classic semantics is linear in the samples"
+                ),
+                stacklevel=4,
+            )
 
 
 def compile_spec(
@@ -263,14 +301,33 @@ def _compare(node: ast.Compare, semantics: Semantics) -> Evaluator:
     left, right = _compile(node.left, semantics), _compile(node.right, semantics)
     if not greater:
         left, right = right, left
-    return lambda trace, start, stop: left(trace, start, stop) - right(trace, start, stop)
+    return _finite_predicate(node, lambda trace, start, stop: left(trace, start, stop) - right(trace, start, stop))
 
 
 @_handles(ast.InRange)
 def _in_range(node: ast.InRange, semantics: Semantics) -> Evaluator:
     expr = _compile(node.expr, semantics)
     half_width, centre = (node.hi - node.lo) / 2, (node.hi + node.lo) / 2
-    return lambda trace, start, stop: half_width - np.abs(expr(trace, start, stop) - centre)
+    return _finite_predicate(node, lambda trace, start, stop: half_width - np.abs(expr(trace, start, stop) - centre))
+
+
+def _finite_predicate(node: ast.Formula, evaluate: Evaluator) -> Evaluator:
+    """`evaluate`, refusing infinite or NaN robustness (a division by zero or an overflow in
+    the predicate's arithmetic), which would otherwise count as satisfied or poison the min."""
+
+    def checked(trace: _Trace, start: int, stop: int) -> np.ndarray:
+        with np.errstate(all="ignore"):
+            values = evaluate(trace, start, stop)
+        if not np.all(np.isfinite(values)):
+            sample = start + int(np.argwhere(~np.isfinite(values))[0][1])
+            kind = "NaN" if np.isnan(values).any() else "infinite"
+            raise SpecError(
+                f"the predicate `{format_formula(node)}` is {kind} at t = {trace.elapsed[sample]:g} s "
+                "(a division by zero or an overflow in its arithmetic)"
+            )
+        return values
+
+    return checked
 
 
 @_handles(ast.Not)

@@ -1,0 +1,30 @@
+"""Size guards: the largest inputs stlopt accepts, checked before any work so that a typo
+(`--rate 1e7`, a model with durations of days) is a clear error, not an exhausted machine.
+
+The limits are far above any real use: a trajectory of 2 million samples is 5.5 hours at
+100 Hz, or 14 minutes at the 2.4 kHz of the simulator.
+"""
+
+from __future__ import annotations
+
+import math
+
+MAX_SAMPLES = 2_000_000  # samples of one trajectory (retrieval, rollout, resampled demo)
+MAX_RATE = 10_000.0  # samples per second
+MAX_TRIALS = 10_000  # trials of one run
+MAX_SEED = 2**32 - 1  # what numpy and torch accept
+MAX_STATES = 200  # HSMM states
+
+
+def samples_problem(duration: float, rate: float) -> str:
+    """Why a trajectory of `duration` seconds at `rate` samples per second is refused, or ''."""
+    if not math.isfinite(duration) or duration <= 0:
+        return f"the duration must be a positive number of seconds (got {duration:g})"
+    if not math.isfinite(rate) or rate <= 0:
+        return f"the rate must be a positive number of samples per second (got {rate:g})"
+    if rate > MAX_RATE:
+        return f"the rate {rate:g} samples/s is above the limit of {MAX_RATE:g} samples/s"
+    samples = duration * rate
+    if samples > MAX_SAMPLES:
+        return f"{duration:g} s at {rate:g} samples/s is {samples:.3g} samples, above the limit of {MAX_SAMPLES:,} per trajectory"
+    return ""
