@@ -84,7 +84,7 @@ def objective_for(task: Task, models: dict[str, HSMM]) -> tuple[SearchSpace, Ski
     recorded = {"x", "y", "z", "gripper", "force"}
     unknown = sorted(set(robustness.signals) - recorded)
     if unknown:
-        raise SpecError(f"{task.spec}: signal {', '.join(unknown)} is not recorded by rollouts (they record {', '.join(sorted(recorded))})")
+        raise SpecError(f"signal {', '.join(unknown)} is not recorded by rollouts (they record {', '.join(sorted(recorded))})", str(task.spec))
     behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None
     parts = split_spec(spec, task.semantics, task.nu, source=str(task.spec))
     return space, SkillObjective(models, space, task, behaviour, load_scene(task.scene), parts)
@@ -95,7 +95,8 @@ def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lam
     create the run directory with all of that in it. `inputs` is the record of the task file and
     command-line overrides (`resume.inputs_record`; default: `task` as its own file)."""
     check_new_run_path(Path(out))
-    learn_progress(f"learning the skills of {task.source.name}" if task.model is None else f"loading {task.model}")
+    if task.model is None:
+        learn_progress(f"learning the skills of {task.source.name}")
     models = task_models(task)
     space, objective = objective_for(task, models)
     start = time.perf_counter()

@@ -38,7 +38,7 @@ import yaml
 from stl_lfd.errors import ConfigError, RunError
 from stl_lfd.files import check_output_folder, folder_mode, write_atomically
 from stl_lfd.hsmm import HSMM, load_model, save_model
-from stl_lfd.optim.loop import Trial
+from stl_lfd.optim.loop import Trial, best_trial
 from stl_lfd.optim.space import build_search_space
 from stl_lfd.optim.task import SINGLE_SKILL, Task, load_task
 from stl_lfd.signals import SignalTable, write_signal_csv
@@ -325,7 +325,8 @@ def trial_skill(path: Path, which: str = "best") -> TrialSkill:
     run = RunDirectory.open(path)
     task, models, trials = run.task(), run.models(), run.trials()
     if which == "best":
-        number = run.summary().get("best_trial") or 0
+        best = best_trial(trials)
+        number = best.trial if best is not None else 0
         if number == 0:
             raise RunError(f"{path}: the run has no successful trial yet; replay the unoptimised skill with --trial initial")
     elif which == "initial":

@@ -108,9 +108,9 @@ def component_robustness(run: RunData) -> Figure | None:
 
 
 def _robustness_curves(axes, run: RunData, label_prefix: str, color: str = "tab:blue") -> None:
-    numbers = np.array([trial.trial for trial in run.trials])
-    values = np.array([trial.robustness if trial.robustness is not None else np.nan for trial in run.trials])
-    initial = np.array([trial.phase == "sobol" for trial in run.trials])
+    numbers = np.array([trial.trial for trial in run.trials], dtype=int)
+    values = np.array([trial.robustness if trial.robustness is not None else np.nan for trial in run.trials], dtype=float)
+    initial = np.array([trial.phase == "sobol" for trial in run.trials], dtype=bool)
     best_so_far = np.fmax.accumulate(np.where(np.isnan(values), -np.inf, values))
     if not label_prefix:
         axes.scatter(numbers[initial], values[initial], marker="s", color="0.5", label="initial (Sobol)", zorder=3)

@@ -1,0 +1,325 @@
+"""A corpus of bad inputs and faults, as a user meets them: each case runs one command and
+asserts its exit code, one error line (spec errors add the source line and a caret), no
+traceback, nothing on stdout, and that no input and no existing run changed.
+
+Placeholders in the arguments: {case} (a fresh folder holding the case's `files`), {model} (a
+learned model), {run} (a finished run; cases that damage a run get a copy at {case}/run),
+{task} (a valid task file), {spec}, {csv}, {demos}.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import pytest
+from typer.testing import CliRunner
+
+from stl_lfd.cli import app
+from tests.conftest import ROOT
+
+runner = CliRunner()
+TASK = "spec: @spec@\nmodel: @model@\nbackend: kinematic\nduration: 22\nrate: 50\nparameters: {means: {components: [2, 3]}}\noptimizer: {initial: 2, trials: 3}\n"
+PHI1 = str(ROOT / "specs" / "phi1.stl")
+
+
+@dataclass
+class Case:
+    id: str
+    arguments: list[str]
+    code: int
+    message: str
+    files: dict[str, str | bytes] = field(default_factory=dict)
+    damage: Callable[[Path], None] | None = None
+
+
+def task_text(**changes: str) -> str:
+    """A valid task file's text with top-level keys replaced (a value None drops the key)."""
+    lines = dict(line.split(": ", 1) for line in TASK.strip().split("\n"))
+    lines.update(changes)
+    return "".join(f"{key}: {value}\n" for key, value in lines.items() if value is not None)
+
+
+def spec_case(id: str, text: str, code: int, message: str, csv: str | None = None) -> Case:
+    files = {"s.stl": text} | ({"s.csv": csv} if csv is not None else {})
+    return Case(id, ["robustness", "{case}/s.stl", "{case}/s.csv" if csv is not None else str(ROOT / "examples" / "s1.csv")], code, message, files)
+
+
+def csv_case(id: str, text: str | bytes, message: str) -> Case:
+    return Case(id, ["robustness", "{case}/s.stl", "{case}/s.csv"], 4, message, {"s.stl": "phi := F s > 0\n", "s.csv": text})
+
+
+def task_case(id: str, message: str, code: int = 5, extra: list[str] | None = None, **changes: str) -> Case:
+    return Case(id, ["optimize", "{case}/t.yaml", "--out", "{case}/out"] + (extra or []), code, message, {"t.yaml": task_text(**changes)})
+
+
+def _edit_json_line(number: int, **changes) -> Callable[[Path], None]:
+    def damage(run: Path) -> None:
+        lines = (run / "trials.jsonl").read_text().splitlines()
+        record = json.loads(lines[number - 1])
+        record.update(changes)
+        lines[number - 1] = json.dumps(record)
+        (run / "trials.jsonl").write_text("\n".join(lines) + "\n")
+
+    return damage
+
+
+DAMAGES: dict[str, tuple[Callable[[Path], None], str]] = {
+    "empty-trials": (lambda run: (run / "trials.jsonl").write_text(""), "no successful trial yet"),
+    "nan-robustness": (_edit_json_line(1, robustness=float("nan")), "damaged (robustness nan)"),
+    "missing-signals": (lambda run: shutil.rmtree(run / "signals"), "signals/ folder is missing"),
+    "trial-gap": (_edit_json_line(2, trial=7), "trial 7 where trial 2 was expected"),
+    "garbage-line": (lambda run: (run / "trials.jsonl").write_text("{not json\n" + (run / "trials.jsonl").read_text()), "trials.jsonl:1: damaged"),
+    "empty-summary": (lambda run: (run / "summary.json").write_text(""), "summary.json:1: not valid JSON"),
+    "summary-list": (lambda run: (run / "summary.json").write_text("[]"), "no finite 'initial_robustness'"),
+    "missing-task": (lambda run: (run / "task.yaml").unlink(), "no task.yaml"),
+    "missing-model": (lambda run: (run / "model.npz").unlink(), "no model.npz"),
+    "bad-status": (_edit_json_line(1, status="weird"), "status 'weird'"),
+    "short-x": (_edit_json_line(1, x=[0.1]), "do not have the task's"),
+    "inputs-garbage": (lambda run: (run / "inputs.json").write_text("{"), "inputs.json: damaged"),
+}
+
+CASES = [
+    # --- specifications ---------------------------------------------------------------------
+    Case("spec-missing", ["robustness", "{case}/nope.stl", "{csv}"], 3, "no such specification file"),
+    Case("spec-is-folder", ["robustness", "{case}", "{csv}"], 3, "is a folder, not a specification file"),
+    spec_case("spec-empty", "", 3, "the specification is empty"),
+    spec_case("spec-only-comment", "# nothing\n", 3, "the specification is empty"),
+    spec_case("spec-unbalanced", "phi := F (s > 0\n", 3, "s.stl:1:16: unexpected end of input"),
+    spec_case("spec-bad-token", "phi := F s >> 0\n", 3, "s.stl:1"),
+    spec_case("spec-unknown-signal", "phi := F q > 0\n", 3, "unknown signal 'q'"),
+    spec_case("spec-undefined-name", "phi := F B\n", 3, "undefined formula 'B'"),
+    spec_case("spec-recursive", "A := F B\nB := G A\n", 3, "recursive definition"),
+    spec_case("spec-defined-twice", "A := s > 0\nA := s < 1\nphi := F A\n", 3, "'A' is defined twice"),
+    spec_case("spec-empty-interval", "phi := F[5, 2] s > 0\n", 3, "empty interval [5, 2]"),
+    spec_case("spec-negative-interval", "phi := G[-1, 2] s > 0\n", 3, "interval bounds must be non-negative"),
+    spec_case("spec-huge-bound", "phi := F[0, 1e400] s > 0\n", 3, "the number 1e400 is too large"),
+    spec_case("spec-huge-constant", "phi := F s > 1e999\n", 3, "the number 1e999 is too large"),
+    spec_case("spec-divide-by-zero", "phi := G s / 0 > 1\n", 3, "is infinite at t = 0 s"),
+    spec_case("spec-zero-over-zero", "phi := G (s - s) / (s - s) > 0\n", 3, "is NaN at t = 0 s"),
+    spec_case("spec-overflow", "phi := F s * 1e308 * 1e308 > 0\n", 3, "is infinite"),
+    spec_case("spec-deep-negation", "phi := " + "!" * 350 + " s > 0\n", 3, "nests more than 200 levels"),
+    spec_case("spec-deep-parentheses", "phi := " + "G (" * 400 + "s > 0" + ")" * 400 + "\n", 3, "nests more than 200 levels"),
+    spec_case("spec-deep-definitions", "A0 := s > 0\n" + "".join(f"A{i} := F A{i - 1}\n" for i in range(1, 260)), 3, "nests more than 200 levels"),
+    spec_case("spec-formula-in-arithmetic", "A := s > 0\nphi := A + 1 > 0\n", 3, "is a formula, not a signal"),
+    spec_case("spec-include-missing", 'include "nope.stl"\nphi := s > 0\n', 3, "included file 'nope.stl' does not exist"),
+    spec_case("spec-include-folder", 'include "/tmp"\nphi := s > 0\n', 3, "is a folder, not a specification file"),
+    spec_case("spec-include-self", 'include "s.stl"\nphi := s > 0\n', 3, "circular include"),
+    spec_case("spec-binary", "\x00\x01\xff", 3, "s.stl"),
+    Case("spec-not-utf8", ["robustness", "{case}/s.stl", "{csv}"], 3, "not a text file", {"s.stl": b"phi := s > \xff\n"}),
+    Case("nu-zero", ["robustness", PHI1, "{csv}", "--semantics", "new", "--nu", "0"], 3, "nu"),
+    Case("nu-negative", ["robustness", PHI1, "{csv}", "--semantics", "new", "--nu", "-1"], 3, "nu"),
+    Case("nu-nan", ["robustness", PHI1, "{csv}", "--semantics", "new", "--nu", "nan"], 3, "nu"),
+    Case("semantics-unknown", ["robustness", PHI1, "{csv}", "--semantics", "fuzzy"], 2, "fuzzy"),
+    # --- signal files -----------------------------------------------------------------------
+    Case("csv-missing", ["robustness", PHI1, "{case}/nope.csv"], 4, "no such file"),
+    Case("csv-is-folder", ["robustness", PHI1, "{case}"], 4, "is a folder"),
+    csv_case("csv-empty", "", "the file is empty"),
+    csv_case("csv-header-only", "t,s\n", "has a header but no samples"),
+    csv_case("csv-no-time", "s\n1\n2\n", "missing column 't'"),
+    csv_case("csv-bom-no-time", "\ufeffs,u\n1,2\n", "missing column 't' (the header has: s, u)"),
+    Case("csv-missing-signal", ["robustness", "{case}/s.stl", "{case}/s.csv"], 3, "unknown signal 's' (the trace has: u)", {"s.stl": "phi := F s > 0\n", "s.csv": "t,u\n0,1\n1,2\n"}),
+    csv_case("csv-text-cell", "t,s\n0,1\n1,abc\n", "s.csv:3: column 's' has 'abc'"),
+    csv_case("csv-nan-cell", "t,s\n0,1\n1,nan\n", "s.csv:3: column 's' is nan"),
+    csv_case("csv-inf-cell", "t,s\n0,inf\n1,1\n", "s.csv:2: column 's' is inf"),
+    csv_case("csv-short-row", "t,s\n0,1\n1\n", "s.csv:3: expected 2 values, found 1"),
+    csv_case("csv-time-backwards", "t,s\n0,1\n2,1\n1,1\n", "time must be strictly increasing"),
+    csv_case("csv-time-repeated", "t,s\n0,1\n0,1\n", "time must be strictly increasing"),
+    csv_case("csv-non-uniform", "t,s\n0,1\n1,1\n3,1\n", "s.csv: sample times are not uniform"),
+    csv_case("csv-duplicate-column", "t,s,s\n0,1,1\n", "duplicate column 's'"),
+    csv_case("csv-empty-column-name", "t,,s\n0,1,1\n", "empty column name"),
+    csv_case("csv-binary", b"\x89PNG\r\n\x1a\n\x00\x00", "not a text file"),
+    # --- learning ---------------------------------------------------------------------------
+    Case("learn-missing-folder", ["learn", "{case}/nope", "-o", "{case}/m.npz"], 4, "no such folder of demonstrations"),
+    Case("learn-empty-folder", ["learn", "{case}", "-o", "{case}/m.npz"], 4, "no demonstration CSV files"),
+    Case("learn-k-zero", ["learn", "{demos}", "-K", "0", "-o", "{case}/m.npz"], 6, "K must be from 1 to 200"),
+    Case("learn-k-huge", ["learn", "{demos}", "-K", "100000", "-o", "{case}/m.npz"], 6, "K must be from 1 to 200"),
+    Case("learn-k-too-many-for-demos", ["learn", "{case}", "-K", "3", "-o", "{case}/m.npz"], 6, "use a smaller K", {"d.csv": "t,x,y,z\n0,1,1,1\n1,1,1,2\n2,1,1,3\n"}),
+    Case("learn-period-zero", ["learn", "{demos}", "--sample-period", "0", "-o", "{case}/m.npz"], 6, "the sample period must be a positive"),
+    Case("learn-period-negative", ["learn", "{demos}", "--sample-period", "-1", "-o", "{case}/m.npz"], 6, "the sample period must be a positive"),
+    Case("learn-period-nan", ["learn", "{demos}", "--sample-period", "nan", "-o", "{case}/m.npz"], 6, "the sample period must be a positive"),
+    Case("learn-period-tiny", ["learn", "{demos}", "--sample-period", "1e-6", "-o", "{case}/m.npz"], 6, "above the limit"),
+    Case("learn-output-folder", ["learn", "{demos}", "-o", "{case}"], 8, "is a folder; give a file name"),
+    Case("learn-output-missing-folder", ["learn", "{demos}", "-o", "{case}/nope/m.npz"], 8, "does not exist"),
+    Case("learn-output-under-file", ["learn", "{demos}", "-o", "{case}/f.txt/m.npz"], 8, "is a file", {"f.txt": "x"}),
+    Case("learn-output-suffix", ["learn", "{demos}", "-o", "{case}/m.txt"], 8, "must end in .npz"),
+    Case("learn-plot-suffix", ["learn", "{demos}", "-o", "{case}/m.npz", "--plot", "{case}/x.txt"], 8, "must end in .png, .pdf or .svg"),
+    Case("learn-plot-missing-folder", ["learn", "{demos}", "-o", "{case}/m.npz", "--plot", "{case}/no/x.png"], 8, "does not exist"),
+    Case("learn-demo-no-x", ["learn", "{case}", "-o", "{case}/m.npz"], 4, "missing column 'x'", {"d.csv": "t,y,z\n0,1,1\n1,1,1\n"}),
+    Case("learn-demo-one-sample", ["learn", "{case}", "-o", "{case}/m.npz"], 4, "needs at least 2 samples", {"d.csv": "t,x,y,z\n0,1,1,1\n"}),
+    Case(
+        "learn-demos-differ", ["learn", "{case}", "-o", "{case}/m.npz"], 4, "differ from",
+        {"a.csv": "t,x,y,z\n0,1,1,1\n1,1,1,1\n", "b.csv": "t,x,y,z,g\n0,1,1,1,0\n1,1,1,1,0\n"},
+    ),
+    # --- models and retrieval ---------------------------------------------------------------
+    Case("model-missing", ["retrieve", "{case}/nope.npz"], 6, "no such model file"),
+    Case("model-empty", ["retrieve", "{case}/m.npz"], 6, "not a model file (it is empty)", {"m.npz": b""}),
+    Case("model-text", ["retrieve", "{case}/m.npz"], 6, "not a model file (not an .npz archive)", {"m.npz": "hello\n"}),
+    Case("model-folder", ["retrieve", "{case}"], 6, "is a folder, not a model file"),
+    Case("retrieve-duration-zero", ["retrieve", "{model}", "--duration", "0"], 6, "the duration must be a positive"),
+    Case("retrieve-duration-negative", ["retrieve", "{model}", "--duration", "-3"], 6, "the duration must be a positive"),
+    Case("retrieve-duration-inf", ["retrieve", "{model}", "--duration", "inf"], 6, "the duration must be a positive"),
+    Case("retrieve-duration-nan", ["retrieve", "{model}", "--duration", "nan"], 6, "the duration must be a positive"),
+    Case("retrieve-duration-huge", ["retrieve", "{model}", "--duration", "1e7"], 6, "above the limit of 2,000,000"),
+    Case("retrieve-rate-zero", ["retrieve", "{model}", "--rate", "0"], 6, "the rate must be a positive"),
+    Case("retrieve-rate-huge", ["retrieve", "{model}", "--rate", "1e7"], 6, "above the limit of 10000"),
+    Case("retrieve-output-folder", ["retrieve", "{model}", "-o", "{case}"], 8, "is a folder"),
+    Case("retrieve-output-missing-folder", ["retrieve", "{model}", "-o", "{case}/no/x.csv"], 8, "does not exist"),
+    Case("retrieve-output-suffix", ["retrieve", "{model}", "-o", "{case}/x.npz"], 8, "must end in .csv"),
+    # --- rollouts ---------------------------------------------------------------------------
+    Case("rollout-unknown-scene", ["rollout", "{model}", "--scene", "kitchen"], 5, "unknown scene 'kitchen'"),
+    Case("rollout-scene-missing-file", ["rollout", "{model}", "--scene", "{case}/s.yaml"], 5, "scene file not found"),
+    Case("rollout-scene-bad-yaml", ["rollout", "{model}", "--scene", "{case}/s.yaml"], 5, "invalid YAML", {"s.yaml": "a: [1, 2\n"}),
+    Case("rollout-scene-unknown-key", ["rollout", "{model}", "--scene", "{case}/s.yaml"], 5, "unknown key 'colour'", {"s.yaml": "description: x\ncolour: red\n"}),
+    Case("rollout-scene-duplicate-key", ["rollout", "{model}", "--scene", "{case}/s.yaml"], 5, "duplicate key 'description'", {"s.yaml": "description: x\ndescription: y\n"}),
+    Case("rollout-backend-unknown", ["rollout", "{model}", "--backend", "mujoco"], 2, "mujoco"),
+    Case("rollout-duration-huge", ["rollout", "{model}", "--backend", "kinematic", "--duration", "1e6"], 6, "above the limit"),
+    Case("rollout-rate-zero", ["rollout", "{model}", "--rate", "0"], 6, "the rate must be a positive"),
+    Case("rollout-output-folder", ["rollout", "{model}", "-o", "{case}"], 8, "is a folder"),
+    Case("rollout-output-suffix", ["rollout", "{model}", "-o", "{case}/x.txt"], 8, "must end in .csv"),
+    # --- task files -------------------------------------------------------------------------
+    Case("task-missing", ["optimize", "{case}/nope.yaml", "--out", "{case}/out"], 5, "no such file"),
+    Case("task-folder", ["optimize", "{case}", "--out", "{case}/out"], 5, "is a folder"),
+    Case("task-bad-yaml", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "t.yaml:2", {"t.yaml": "spec: a\n  - b: [\n"}),
+    Case("task-not-mapping", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "expected a mapping", {"t.yaml": "- 1\n- 2\n"}),
+    Case("task-duplicate-key", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "duplicate key 'duration'", {"t.yaml": task_text() + "duration: 5\n"}),
+    Case(
+        "task-alias-bomb", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "aliases expand to more than",
+        {"t.yaml": "a: &a [1,1,1,1,1,1,1,1,1,1]\n" + "".join(f"{chr(98 + i)}: &{chr(98 + i)} [" + ",".join([f"*{chr(97 + i)}"] * 10) + "]\n" for i in range(6))},
+    ),
+    Case("task-huge-file", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "larger than 1000 kB", {"t.yaml": "# " + "x" * 1_100_000 + "\n"}),
+    task_case("task-unknown-key", "unknown key 'iterations'", iterations="5"),
+    task_case("task-no-spec", "missing key 'spec'", spec=None),
+    task_case("task-spec-missing-file", "'spec' names nope.stl, which does not exist", spec="nope.stl"),
+    task_case("task-model-and-demos", "give exactly one of 'model'", demos=str(ROOT / "demos" / "three_regions")),
+    task_case("task-duration-text", "'duration' must be a number (got 'long')", duration="long"),
+    task_case("task-duration-zero", "'duration' must be positive", duration="0"),
+    task_case("task-rate-huge", "above the limit of 10000", rate="1e9"),
+    task_case("task-rate-samples", "above the limit of 2,000,000", rate="1000", duration="1e4"),
+    task_case("task-nu-negative", "'nu' must be positive", nu="-1"),
+    task_case("task-semantics", "'semantics' must be one of new, classic", semantics="fuzzy"),
+    task_case("task-backend", "'backend' must be one of pybullet, kinematic", backend="mujoco"),
+    task_case("task-name-slash", "'name' must be a plain name", name="../elsewhere"),
+    task_case("task-seed-huge", "'optimizer.seed' must be at most 4294967295", optimizer="{seed: 1e23}"),
+    task_case("task-seed-negative", "'optimizer.seed' must be at least 0", optimizer="{seed: -1}"),
+    task_case("task-seed-text", "'optimizer.seed' must be an integer", optimizer="{seed: abc}"),
+    task_case("task-trials-zero", "must be at least 1", optimizer="{trials: 0}"),
+    task_case("task-trials-huge", "above the limit of 10000 trials", optimizer="{trials: 1e6}"),
+    task_case("task-initial-above-trials", "exceeds 'optimizer.trials'", optimizer="{initial: 10, trials: 5}"),
+    task_case("task-method", "'optimizer.method' must be one of", optimizer="{method: magic}"),
+    task_case("task-optimizer-unknown-key", "unknown key 'optimizer.budget'", optimizer="{budget: 3}"),
+    task_case("task-nothing-to-optimise", "selects nothing to optimise", parameters="{}"),
+    task_case("task-state-out-of-range", "state 9", parameters="{means: {components: [9]}}"),
+    task_case("task-state-twice", "lists a state twice", parameters="{means: {components: [2, 2]}}"),
+    task_case("task-coordinate", "may hold x, y, z (got 'w')", parameters="{means: {components: [2], coordinates: [w]}}"),
+    task_case("task-beta-negative", "'parameters.means.beta' must be positive", parameters="{means: {components: [2], beta: -1}}"),
+    task_case("task-transitions", "'parameters.transitions' must be one of none, band, full", parameters="{transitions: diag}"),
+    task_case("task-horizon", "looks 17 s ahead but rollouts last 5 s", duration="5"),
+    Case("task-spec-unknown-signal", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 3, "signal q is not recorded", {"t.yaml": task_text(spec="q.stl"), "q.stl": "phi := F q > 0\n"}),
+    task_case("cli-seed-huge", "must be from 0 to 4294967295", extra=["--seed", "99999999999999"]),
+    task_case("cli-init-above-iterations", "exceeds 'optimizer.trials'", extra=["--init", "9", "--iterations", "4"]),
+    task_case("cli-iterations-zero", "must be at least 1", extra=["--iterations", "0"]),
+    task_case("cli-spec-missing", "no such specification file", code=3, extra=["--spec", "{case}/nope.stl"]),
+    task_case("cli-method-unknown", "magic", code=2, extra=["--method", "magic"]),
+    Case("out-under-file", ["optimize", "{task}", "--out", "{case}/f.txt/run"], 8, "is a file", {"f.txt": "x"}),
+    Case("out-is-file", ["optimize", "{task}", "--out", "{case}/f.txt"], 9, "the run directory exists", {"f.txt": "x"}),
+    Case("out-is-existing-run", ["optimize", "{task}", "--out", "{run}"], 9, "the run directory exists; continue it with --resume"),
+    # --- resuming ---------------------------------------------------------------------------
+    Case("resume-missing", ["optimize", "{task}", "--out", "{case}/nope", "--resume"], 9, "no such run directory"),
+    Case("resume-not-a-run", ["optimize", "{task}", "--out", "{case}", "--resume"], 9, "not a run directory of stlopt optimize"),
+    Case("resume-other-seed", ["optimize", "{task}", "--out", "{run}", "--resume", "--seed", "5"], 9, "--seed cannot change on --resume (the run has 0, got 5)"),
+    Case("resume-other-method", ["optimize", "{task}", "--out", "{run}", "--resume", "--method", "pi"], 9, "--method cannot change on --resume (the run has stl, got pi)"),
+    Case("resume-other-backend", ["optimize", "{task}", "--out", "{run}", "--resume", "--backend", "pybullet"], 9, "--backend cannot change on --resume"),
+    Case("resume-other-init", ["optimize", "{task}", "--out", "{run}", "--resume", "--init", "1"], 9, "--init cannot change on --resume"),
+    Case("resume-other-spec", ["optimize", "{task}", "--out", "{run}", "--resume", "--spec", str(ROOT / "specs" / "phi2.stl")], 9, "--spec cannot change on --resume"),
+    Case(
+        "resume-other-task", ["optimize", "{case}/t.yaml", "--out", "{run}", "--resume"], 9, "not the task of the run",
+        {"t.yaml": task_text(parameters="{means: {components: [2, 3]}, transitions: band}")},
+    ),
+    *[Case(f"damaged-resume-{name}", ["optimize", "{task}", "--out", "{case}/run", "--resume"], 9, message, damage=damage) for name, (damage, message) in DAMAGES.items() if name not in ("empty-trials",)],
+    *[Case(f"damaged-report-{name}", ["report", "{case}/run", "--out", "{case}/report"], 9, message, damage=damage) for name, (damage, message) in DAMAGES.items() if name not in ("empty-trials", "short-x", "inputs-garbage")],
+    Case("damaged-replay-empty-trials", ["replay", "{case}/run", "--video", "{case}/v.mp4"], 9, "no successful trial yet", damage=DAMAGES["empty-trials"][0]),
+    # --- replay and report ------------------------------------------------------------------
+    Case("replay-trial-negative", ["replay", "{run}", "--trial", "-1", "--video", "{case}/v.mp4"], 9, "no trial -1 (the run has trials 1 to 3"),
+    Case("replay-trial-zero", ["replay", "{run}", "--trial", "0", "--video", "{case}/v.mp4"], 9, "no trial 0"),
+    Case("replay-trial-beyond", ["replay", "{run}", "--trial", "99", "--video", "{case}/v.mp4"], 9, "no trial 99"),
+    Case("replay-trial-word", ["replay", "{run}", "--trial", "last", "--video", "{case}/v.mp4"], 5, "--trial must be 'best', 'initial' or a trial number"),
+    Case("replay-trial-on-model", ["replay", "{model}", "--trial", "3", "--video", "{case}/v.mp4"], 7, "--trial applies to run directories"),
+    Case("replay-missing-source", ["replay", "{case}/nope", "--video", "{case}/v.mp4"], 5, "no such model file or run directory"),
+    Case("replay-video-suffix", ["replay", "{model}", "--video", "{case}/v.avi"], 8, "must end in .mp4 or .gif"),
+    Case("replay-video-folder", ["replay", "{model}", "--video", "{case}"], 8, "is a folder"),
+    Case("replay-video-missing-folder", ["replay", "{model}", "--video", "{case}/no/v.mp4"], 8, "does not exist"),
+    Case("replay-gui-without-display", ["replay", "{model}", "--gui"], 7, "--gui needs a display"),
+    Case("report-missing-run", ["report", "{case}/nope"], 9, "no such run directory"),
+    Case("report-not-a-run", ["report", "{case}"], 9, "not a run directory"),
+    Case("report-out-is-file", ["report", "{run}", "--out", "{case}/f.txt"], 8, "is a file; the report folder must be a folder", {"f.txt": "x"}),
+    Case("report-compare-missing", ["report", "{run}", "--out", "{case}/r", "--compare", "{case}/nope"], 9, "no such run directory"),
+    Case("report-gp-parameter", ["report", "{run}", "--out", "{case}/r", "--gp-parameter", "mean[9].q"], 5, "is not a parameter of the run"),
+]
+
+
+@pytest.fixture(scope="module")
+def workspace(tmp_path_factory, learned_model_file) -> dict[str, Path]:
+    """The shared inputs: a model, a valid task and a finished 3-trial run."""
+    from stl_lfd.optim import load_task, optimise, start_run
+
+    folder = tmp_path_factory.mktemp("workspace")
+    task = folder / "task.yaml"
+    task.write_text(TASK.replace("@spec@", PHI1).replace("@model@", str(learned_model_file)))
+    with start_run(load_task(task), folder / "run") as prepared:
+        optimise(prepared)
+    return {"model": learned_model_file, "task": task, "run": folder / "run"}
+
+
+def snapshot(*folders: Path) -> dict[str, str]:
+    """Every file under `folders` (but the run lock, whose PID changes) -> digest of its bytes."""
+    files = {}
+    for folder in folders:
+        for path in sorted(Path(folder).rglob("*")):
+            if path.is_file() and path.name != ".lock":
+                files[str(path)] = hashlib.sha256(path.read_bytes()).hexdigest()
+    return files
+
+
+def test_the_corpus_is_large_and_its_names_unique():
+    assert len(CASES) >= 100
+    assert len({case.id for case in CASES}) == len(CASES)
+
+
+@pytest.mark.parametrize("case", CASES, ids=[case.id for case in CASES])
+def test_bad_input(case: Case, workspace, tmp_path, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    folder = tmp_path / "case"
+    folder.mkdir()
+    for name, content in case.files.items():
+        path = folder / name
+        path.write_bytes(content) if isinstance(content, bytes) else path.write_text(content.replace("@spec@", PHI1).replace("@model@", str(workspace["model"])))
+    if case.damage is not None:
+        shutil.copytree(workspace["run"], folder / "run")
+        case.damage(folder / "run")
+    places = {"case": folder, "csv": ROOT / "examples" / "three_regions.csv", "demos": ROOT / "demos" / "three_regions", "spec": PHI1, **workspace}
+    arguments = [argument.format(**{key: str(value) for key, value in places.items()}) for argument in case.arguments]
+    before = snapshot(folder, workspace["run"], workspace["model"].parent, ROOT / "specs", ROOT / "configs")
+    result = runner.invoke(app, arguments)
+    assert result.exit_code == case.code, result.stderr + result.stdout
+    assert "Traceback" not in result.stderr and result.stdout == ""
+    lines = result.stderr.splitlines()
+    assert lines and lines[0].startswith("error: ") or case.code == 2, result.stderr
+    if case.code != 2:
+        extra = lines[1:]
+        assert not extra or (len(extra) == 2 and extra[1].strip() == "^"), result.stderr  # a spec error's line and caret
+    assert case.message in result.stderr, result.stderr
+    after = snapshot(folder, workspace["run"], workspace["model"].parent, ROOT / "specs", ROOT / "configs")
+    assert after == before, "the command changed its inputs or an existing run"
+
+
+def test_a_run_without_trials_yet_still_reports(workspace, tmp_path):
+    shutil.copytree(workspace["run"], tmp_path / "run")
+    (tmp_path / "run" / "trials.jsonl").write_text("")
+    result = runner.invoke(app, ["report", str(tmp_path / "run"), "--out", str(tmp_path / "report")])
+    assert result.exit_code == 0, result.stderr
+    assert (tmp_path / "report" / "index.html").exists()

@@ -1,0 +1,146 @@
+"""The README's console examples: every `$` command runs, in order, in a scratch folder that
+holds the repository's specs, examples, demos and configs, and prints what the README shows.
+
+How an example's output is compared with what the command printed (stdout and stderr):
+- a line `...` stands for any number of lines; otherwise every stdout line must be shown;
+- `# (stderr)` at the end of a line is a comment;
+- whitespace runs count as one space;
+- numbers must be equal as written, except a number written with a trailing `...` (a prefix
+  of the printed one) and durations (a number followed by `s` or `x real time`), which vary
+  from machine to machine.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import ROOT
+
+NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?:\.\.\.)?")
+DURATION_AFTER = re.compile(r"^ ?(s\b|x real time)")
+SLOW_COMMANDS = ("stlopt optimize", "stlopt replay")
+
+
+@dataclass
+class Example:
+    command: str
+    expected: list[str]
+    line: int
+
+
+def console_examples(text: str) -> list[Example]:
+    """The `$` commands of the README's console blocks with the lines shown after each."""
+    examples: list[Example] = []
+    inside = False
+    for number, line in enumerate(text.splitlines(), start=1):
+        if line.startswith("```"):
+            inside = line.strip() == "```console"
+            continue
+        if not inside:
+            continue
+        if line.startswith("$ "):
+            examples.append(Example(line[2:], [], number))
+        elif examples:
+            examples[-1].expected.append(line.split("# (stderr)")[0].rstrip())
+    return examples
+
+
+def _tokens(line: str) -> list[str]:
+    return [token for token in re.split(f"({NUMBER.pattern})", " ".join(line.split())) if token]
+
+
+def line_matches(expected: str, printed: str) -> bool:
+    """Whether a printed line is the one the README shows (see the module docstring)."""
+    want, got = _tokens(expected), _tokens(printed)
+    if len(want) != len(got):
+        return False
+    for index, (token, actual) in enumerate(zip(want, got)):
+        if not NUMBER.fullmatch(token):
+            if token != actual:
+                return False
+            continue
+        following = want[index + 1] if index + 1 < len(want) else ""
+        if DURATION_AFTER.match(following):
+            continue
+        if token.endswith("..."):
+            if not actual.startswith(token[:-3]):
+                return False
+        elif token != actual:
+            return False
+    return True
+
+
+def output_matches(expected: list[str], stdout: str, stderr: str) -> str:
+    """'' when the output is what the README shows, else what is missing or extra."""
+    printed = [line for line in stdout.splitlines() + stderr.splitlines() if line.strip()]
+    shown = [line for line in expected if line.strip()]
+    unmatched = list(printed)
+    for line in shown:
+        if line.strip() == "...":
+            continue
+        found = next((candidate for candidate in unmatched if line_matches(line, candidate)), None)
+        if found is None:
+            return f"the README shows {line!r}, which was not printed"
+        unmatched.remove(found)
+    extra = [line for line in unmatched if line in stdout.splitlines()]
+    if extra and not any(line.strip() == "..." for line in shown):
+        return f"printed {extra[0]!r}, which the README does not show"
+    return ""
+
+
+EXAMPLES = console_examples((ROOT / "README.md").read_text())
+
+
+def test_the_readme_has_console_examples_and_the_matcher_works():
+    assert len(EXAMPLES) >= 8
+    assert line_matches("-0.03572971192...", "-0.035729711921")
+    assert not line_matches("-0.0357...", "-0.0358")
+    assert line_matches("rollout: 22.00 s simulated in 0.56 s (39x real time)", "rollout: 22.00 s simulated in 1.52 s (15x real time)")
+    assert not line_matches("tracking error RMS 0.07 mm", "tracking error RMS 0.06 mm")
+    assert output_matches(["a 1", "..."], "a 1\nb 2\n", "") == ""
+    assert "does not show" in output_matches(["a 1"], "a 1\nb 2\n", "")
+
+
+@pytest.fixture(scope="module")
+def scratch(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("readme")
+    for name in ("specs", "examples", "demos", "configs"):
+        (folder / name).symlink_to(ROOT / name)
+    return folder
+
+
+def _is_slow(example: Example) -> bool:
+    return example.command.startswith(SLOW_COMMANDS)
+
+
+_done: dict[int, subprocess.CompletedProcess] = {}
+
+
+def _run_up_to(index: int, folder: Path) -> subprocess.CompletedProcess:
+    """Run example `index` after every earlier one that is not slow (examples use the files
+    earlier ones wrote; the slow ones, a full optimisation and a filmed replay, write nothing
+    a later example reads)."""
+    for earlier in range(index + 1):
+        if earlier not in _done and (earlier == index or not _is_slow(EXAMPLES[earlier])):
+            environment = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}", COLUMNS="200")
+            _done[earlier] = subprocess.run(
+                ["bash", "-o", "pipefail", "-c", EXAMPLES[earlier].command], cwd=folder, env=environment, capture_output=True, text=True, timeout=900
+            )
+    return _done[index]
+
+
+@pytest.mark.parametrize("index", [pytest.param(index, marks=[pytest.mark.slow] if _is_slow(example) else [], id=f"line{example.line}") for index, example in enumerate(EXAMPLES)])
+def test_readme_console_example(index, scratch):
+    example = EXAMPLES[index]
+    result = _run_up_to(index, scratch)
+    expects_error = any(line.startswith("error:") for line in example.expected)
+    assert (result.returncode != 0) == expects_error, f"README line {example.line}: `{example.command}` exited {result.returncode}: {result.stderr[-500:]}"
+    problem = output_matches(example.expected, result.stdout, result.stderr)
+    assert not problem, f"README line {example.line}: `{example.command}`: {problem}"
