@@ -242,7 +242,12 @@ def rollout(
         model = load_model(model_file)
         world = load_scene(scene)
         start = time.perf_counter()
-        result = rollout_model(model, world, backend.value, duration, rate)
+        simulated = duration if duration is not None else model.expected_duration()
+        if backend is BackendOption.pybullet and simulated > LONG_ROLLOUT_SECONDS:
+            with _progress_bar(f"simulating {simulated:.0f} s", int(simulated)) as advance:
+                result = rollout_model(model, world, backend.value, duration, rate, _whole_seconds(advance))
+        else:
+            result = rollout_model(model, world, backend.value, duration, rate)
         elapsed = time.perf_counter() - start
         write_signal_csv(result.signals, output if output is not None else sys.stdout)
     simulated = result.signals.duration
@@ -252,6 +257,21 @@ def rollout(
         f"worst {1000 * result.tracking_max:.2f} mm" + (f"; wrote {output}" if output is not None else ""),
         file=sys.stderr,
     )
+
+
+LONG_ROLLOUT_SECONDS = 120.0  # simulated seconds from which a rollout shows a progress bar
+
+
+def _whole_seconds(advance):
+    """A simulation observer that reports progress once per simulated second."""
+    shown = [-1]
+
+    def observe(time: float, world: object) -> None:
+        if int(time) != shown[0]:
+            shown[0] = int(time)
+            advance(shown[0])
+
+    return observe
 
 
 def _check_duration_and_rate(duration: Optional[float], rate: float) -> None:

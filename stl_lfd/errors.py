@@ -55,10 +55,11 @@ class SpecError(StlLfdError):
         return type(self)(self.message, source, self.line, self.column, context)
 
     def __str__(self) -> str:
-        where = self.source
-        if self.line:
-            where += f":{self.line}:{self.column}"
-        head = f"{where}: {self.message}"
+        if self.source == "<string>" and not self.line:  # not about a place in a text: no prefix
+            head = self.message
+        else:
+            where = self.source + (f":{self.line}:{self.column}" if self.line else "")
+            head = f"{where}: {self.message}"
         return f"{head}\n{self.context}" if self.context else head
 
 

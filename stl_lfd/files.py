@@ -55,6 +55,29 @@ def check_output_folder(path: Path | str, what: str = "output folder") -> Path:
     return path
 
 
+class UnreadableFile(Exception):
+    """Why `read_text` could not read a file; callers turn it into their own error class."""
+
+
+def read_text(path: Path | str, what: str) -> str:
+    """The text of a UTF-8 file, a byte-order mark dropped.
+
+    Raises:
+        UnreadableFile: "no such WHAT", "is a folder, not a WHAT", "not a text file ...".
+    """
+    try:
+        return Path(path).read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        problem = f"no such {what}"
+    except IsADirectoryError:
+        problem = f"is a folder, not a {what}"
+    except UnicodeDecodeError:
+        problem = f"not a text file (it is not UTF-8); expected a {what}"
+    except OSError as error:
+        problem = f"cannot read the {what} ({error.strerror or error})"
+    raise UnreadableFile(problem)
+
+
 @contextmanager
 def atomic_output(path: Path | str) -> Iterator[Path]:
     """A temporary path beside `path` to write to; renamed to `path` when the block succeeds,

@@ -16,7 +16,7 @@ from typing import TextIO
 import numpy as np
 
 from stl_lfd.errors import SignalError
-from stl_lfd.files import write_atomically
+from stl_lfd.files import UnreadableFile, read_text, write_atomically
 
 TIME_COLUMN = "t"
 
@@ -98,15 +98,9 @@ def _read_text(path: str | Path, shown: str) -> str:
     if str(path) == "-":
         return sys.stdin.read().removeprefix("\ufeff")
     try:
-        return Path(path).read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise SignalError(f"{shown}: no such file") from None
-    except IsADirectoryError:
-        raise SignalError(f"{shown}: is a folder, expected a CSV file") from None
-    except UnicodeDecodeError:
-        raise SignalError(f"{shown}: not a text file (it is not UTF-8); expected a CSV file") from None
-    except OSError as error:
-        raise SignalError(f"{shown}: cannot read the file ({error.strerror or error})") from None
+        return read_text(path, "CSV file")
+    except UnreadableFile as error:
+        raise SignalError(f"{shown}: {error}") from None
 
 
 def _check_header(header: list[str], required: tuple[str, ...], shown: str) -> None:

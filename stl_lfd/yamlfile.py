@@ -13,6 +13,7 @@ from typing import Any, Iterable
 import yaml
 
 from stl_lfd.errors import ConfigError
+from stl_lfd.files import UnreadableFile, read_text
 
 
 MAX_BYTES = 1_000_000  # task, scene and behaviour files are a few hundred bytes
@@ -44,18 +45,12 @@ _Loader.add_implicit_resolver(
 def read_yaml(path: Path | str) -> dict[str, Any]:
     """The top-level mapping of a YAML file; ConfigError for a missing, huge or bad file."""
     path = Path(path)
+    if path.is_file() and path.stat().st_size > MAX_BYTES:
+        raise ConfigError(f"{path}: the file is larger than {MAX_BYTES // 1000} kB; is it the right file?")
     try:
-        if path.stat().st_size > MAX_BYTES:
-            raise ConfigError(f"{path}: the file is larger than {MAX_BYTES // 1000} kB; is it the right file?")
-        text = path.read_text(encoding="utf-8-sig")
-    except IsADirectoryError:
-        raise ConfigError(f"{path}: is a folder, expected a YAML file") from None
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such file") from None
-    except UnicodeDecodeError:
-        raise ConfigError(f"{path}: not a text file (it is not UTF-8)") from None
-    except OSError as error:
-        raise ConfigError(f"{path}: cannot read ({error.strerror or error})") from None
+        text = read_text(path, "YAML file")
+    except UnreadableFile as error:
+        raise ConfigError(f"{path}: {error}") from None
     try:
         loader = _Loader(text)
         try:

@@ -86,7 +86,7 @@ def test_signal_errors_through_the_cli(tmp_path: Path):
     assert result.exit_code == 4
     assert result.stderr.strip() == f"error: {bad}:3: column 's' is nan"
     missing = invoke("robustness", EXAMPLE, str(tmp_path / "none.csv"))
-    assert missing.exit_code == 4 and "no such file" in missing.stderr
+    assert missing.exit_code == 4 and "no such CSV file" in missing.stderr
 
 
 def test_bad_options_are_usage_errors():

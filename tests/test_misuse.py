@@ -116,7 +116,7 @@ CASES = [
     Case("nu-nan", ["robustness", PHI1, "{csv}", "--semantics", "new", "--nu", "nan"], 3, "nu"),
     Case("semantics-unknown", ["robustness", PHI1, "{csv}", "--semantics", "fuzzy"], 2, "fuzzy"),
     # --- signal files -----------------------------------------------------------------------
-    Case("csv-missing", ["robustness", PHI1, "{case}/nope.csv"], 4, "no such file"),
+    Case("csv-missing", ["robustness", PHI1, "{case}/nope.csv"], 4, "no such CSV file"),
     Case("csv-is-folder", ["robustness", PHI1, "{case}"], 4, "is a folder"),
     csv_case("csv-empty", "", "the file is empty"),
     csv_case("csv-header-only", "t,s\n", "has a header but no samples"),
@@ -182,7 +182,7 @@ CASES = [
     Case("rollout-output-folder", ["rollout", "{model}", "-o", "{case}"], 8, "is a folder"),
     Case("rollout-output-suffix", ["rollout", "{model}", "-o", "{case}/x.txt"], 8, "must end in .csv"),
     # --- task files -------------------------------------------------------------------------
-    Case("task-missing", ["optimize", "{case}/nope.yaml", "--out", "{case}/out"], 5, "no such file"),
+    Case("task-missing", ["optimize", "{case}/nope.yaml", "--out", "{case}/out"], 5, "no such YAML file"),
     Case("task-folder", ["optimize", "{case}", "--out", "{case}/out"], 5, "is a folder"),
     Case("task-bad-yaml", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "t.yaml:2", {"t.yaml": "spec: a\n  - b: [\n"}),
     Case("task-not-mapping", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "expected a mapping", {"t.yaml": "- 1\n- 2\n"}),

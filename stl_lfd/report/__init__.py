@@ -7,6 +7,7 @@ from pathlib import Path
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.files import atomic_output, check_output_folder
+from stl_lfd.optim.rundir import RunDirectory
 
 
 def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (), gp_parameters: list[str] | None = None) -> tuple[Path, list[Path]]:
@@ -20,6 +21,8 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
     from stl_lfd.report.run_data import load_run
 
     out = check_output_folder(Path(out) if out is not None else Path(run_dir) / "report", "report folder")
+    for path in [run_dir, *compare]:  # every run is found before any is loaded
+        RunDirectory.open(path)
     run = load_run(run_dir)
     others = [load_run(path) for path in compare]
     if gp_parameters:

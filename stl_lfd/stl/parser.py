@@ -15,6 +15,7 @@ from lark import Lark, Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
 from stl_lfd.errors import SpecError, StlNameError, StlSyntaxError, caret_context
+from stl_lfd.files import UnreadableFile, read_text
 from stl_lfd.stl import ast
 
 _READABLE_TERMINALS = {
@@ -72,15 +73,9 @@ def resolve(spec: ast.Spec) -> ast.Formula:
 
 def _read(path: Path, shown: str) -> str:
     try:
-        return path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise SpecError("no such specification file", shown) from None
-    except IsADirectoryError:
-        raise SpecError("is a folder, not a specification file", shown) from None
-    except UnicodeDecodeError:
-        raise SpecError("not a text file (it is not UTF-8)", shown) from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise SpecError(f"cannot read the specification: {error}", shown) from None
+        return read_text(path, "specification file")
+    except UnreadableFile as error:
+        raise SpecError(str(error), shown) from None
 
 
 MAX_DEPTH = 200  # operator nesting, through defined names; deeper formulas are refused
