@@ -203,7 +203,11 @@ def retrieve(
         if output is not None:
             check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
         model = load_model(model_file)
-        trajectory = retrieve_trajectory(model, duration, rate)
+        try:
+            trajectory = retrieve_trajectory(model, duration, rate)
+        except ModelError as error:
+            whose = "" if duration is not None else f" (its expected duration, {model.expected_duration():.3g} s)"
+            raise ModelError(f"{model_file}{whose}: {error}") from None
         columns = {name: trajectory.positions[:, index] for index, name in enumerate(trajectory.signal_names)}
         columns["state"] = trajectory.states + 1.0
         write_signal_csv(SignalTable(trajectory.times, columns), output if output is not None else sys.stdout)

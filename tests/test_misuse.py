@@ -4,7 +4,8 @@ traceback, nothing on stdout, and that no input and no existing run changed.
 
 Placeholders in the arguments: {case} (a fresh folder holding the case's `files`), {model} (a
 learned model), {run} (a finished run; cases that damage a run get a copy at {case}/run),
-{task} (a valid task file), {spec}, {csv}, {demos}.
+{task} (a valid task file), {slow_model} (a model whose states last 10^9 s), {spec}, {csv},
+{demos}.
 """
 
 from __future__ import annotations
@@ -160,6 +161,8 @@ CASES = [
     Case("model-empty", ["retrieve", "{case}/m.npz"], 6, "not a model file (it is empty)", {"m.npz": b""}),
     Case("model-text", ["retrieve", "{case}/m.npz"], 6, "not a model file (not an .npz archive)", {"m.npz": "hello\n"}),
     Case("model-folder", ["retrieve", "{case}"], 6, "is a folder, not a model file"),
+    Case("retrieve-model-durations-huge", ["retrieve", "{slow_model}"], 6, "slow.npz (its expected duration, 6e+09 s): cannot retrieve the skill"),
+    Case("rollout-model-durations-huge", ["rollout", "{slow_model}", "--backend", "kinematic"], 6, "above the limit of 2,000,000"),
     Case("retrieve-duration-zero", ["retrieve", "{model}", "--duration", "0"], 6, "the duration must be a positive"),
     Case("retrieve-duration-negative", ["retrieve", "{model}", "--duration", "-3"], 6, "the duration must be a positive"),
     Case("retrieve-duration-inf", ["retrieve", "{model}", "--duration", "inf"], 6, "the duration must be a positive"),
@@ -272,7 +275,12 @@ def workspace(tmp_path_factory, learned_model_file) -> dict[str, Path]:
     task.write_text(TASK.replace("@spec@", PHI1).replace("@model@", str(learned_model_file)))
     with start_run(load_task(task), folder / "run") as prepared:
         optimise(prepared)
-    return {"model": learned_model_file, "task": task, "run": folder / "run"}
+    from stl_lfd.hsmm import load_model, save_model
+
+    slow_skill = load_model(learned_model_file)
+    slow_skill.duration_means_[:] = 1e9  # states that last 30 years: retrieval would need terabytes
+    save_model(slow_skill, folder / "slow.npz")
+    return {"model": learned_model_file, "task": task, "run": folder / "run", "slow_model": folder / "slow.npz"}
 
 
 def snapshot(*folders: Path) -> dict[str, str]:
