@@ -101,3 +101,18 @@ def test_horizon_warning_goes_to_stderr(tmp_path: Path):
     result = invoke("robustness", str(spec), S1)
     assert result.exit_code == 0
     assert "warning:" in result.stderr and "looks 30 s ahead" in result.stderr
+
+
+def test_help_fits_80_columns_with_whole_examples_and_plain_types():
+    command = get_command(app)
+    for name, subcommand in command.commands.items():
+        result = runner.invoke(app, [name, "--help"], env={"COLUMNS": "80"}, terminal_width=80, prog_name="stlopt")
+        assert result.exit_code == 0
+        lines = result.stdout.splitlines()
+        assert all(len(line) <= 80 for line in lines), name
+        assert lines[0].startswith(f"Usage: stlopt {name} [OPTIONS] ") and "{" not in lines[0], lines[0]
+        assert "<bool>" not in result.stdout
+        docstring_examples = [line.strip() for line in (subcommand.help or "").splitlines() if line.strip().startswith("stlopt ")]
+        assert docstring_examples, name
+        for example in docstring_examples:
+            assert any(line.strip() == example for line in lines), f"{name}: example split: {example}"

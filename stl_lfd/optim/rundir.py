@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from stl_lfd.errors import ConfigError, RunError
+from stl_lfd.errors import ConfigError, OutputError, RunError
 from stl_lfd.files import check_output_folder, folder_mode, write_atomically
 from stl_lfd.hsmm import HSMM, load_model, save_model
 from stl_lfd.optim.loop import Trial, best_trial
@@ -68,8 +68,11 @@ class RunDirectory:
         locked for writing by this process."""
         path = Path(path)
         check_new_run_path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+        except OSError as error:
+            raise OutputError(f"{path}: cannot create the run directory ({error.strerror or error})") from None
         lock = None
         try:
             staging.chmod(folder_mode())  # mkdtemp makes it private; a run folder is an ordinary one
