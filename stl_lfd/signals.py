@@ -9,6 +9,7 @@ import io
 import math
 import os
 import sys
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TextIO
@@ -56,16 +57,19 @@ def read_signal_csv(path: str | Path, required: tuple[str, ...] = ()) -> SignalT
     """
     shown = "<stdin>" if str(path) == "-" else str(path)
     text = _read_text(path, shown)
-    rows = list(csv.reader(io.StringIO(text)))
-    while rows and not any(cell.strip() for cell in rows[-1]):
-        rows.pop()
-    if not rows:
+    first_line, _, body = text.lstrip("\n").partition("\n")
+    if not first_line.strip():
         raise SignalError(f"{shown}: the file is empty (expected a header row such as t,x,y,z)")
-    header = [name.strip() for name in rows[0]]
+    header = [name.strip() for name in next(csv.reader([first_line]))]
     _check_header(header, required, shown)
-    if len(rows) < 2:
+    if not body.strip():
         raise SignalError(f"{shown}: the file has a header but no samples")
-    data = _parse_rows(rows[1:], header, shown)
+    data = _parse_fast(body, len(header))
+    if data is None:  # something is wrong: the careful scan finds where
+        rows = list(csv.reader(io.StringIO(text)))
+        while rows and not any(cell.strip() for cell in rows[-1]):
+            rows.pop()
+        data = _parse_rows(rows[1:], header, shown)
     times = data[:, header.index(TIME_COLUMN)]
     steps = np.diff(times)
     if np.any(steps <= 0):
@@ -112,6 +116,19 @@ def _check_header(header: list[str], required: tuple[str, ...], shown: str) -> N
     missing = [name for name in (TIME_COLUMN, *required) if name not in header]
     if missing:
         raise SignalError(f"{shown}:1: missing column '{missing[0]}' (the header has: {', '.join(header)})")
+
+
+def _parse_fast(text: str, columns: int) -> np.ndarray | None:
+    """The samples (`T x columns`) when every row is well formed and finite; None otherwise."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            data = np.loadtxt(io.StringIO(text), delimiter=",", ndmin=2, dtype=float)
+        except ValueError:
+            return None
+    if data.shape[1] != columns or not np.all(np.isfinite(data)):
+        return None
+    return data
 
 
 def _parse_rows(rows: list[list[str]], header: list[str], shown: str) -> np.ndarray:

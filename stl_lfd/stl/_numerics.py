@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
-from scipy.ndimage import minimum_filter1d
 
 # Largest number of array elements a windowed evaluation materialises at once.
 _CHUNK_ELEMENTS = 1 << 22
@@ -67,7 +66,7 @@ def window_min(values: np.ndarray, width: int, count: int) -> np.ndarray:
     """Forward sliding minimum: `out[..., i] = min(values[..., i : i + width])`.
 
     Windows past the end are clipped; a window with no sample gives +inf. Cost O(n) whatever
-    the width (scipy's running-minimum filter).
+    the width: van Herk / Gil-Werman, the minimum of a block suffix and the next block's prefix.
 
     Args:
         values: `... x n` array.
@@ -82,8 +81,12 @@ def window_min(values: np.ndarray, width: int, count: int) -> np.ndarray:
         return values[..., :width].min(axis=-1, keepdims=True)
     if width >= values.shape[-1]:
         return suffix_min(values)[..., :count]
-    filtered = minimum_filter1d(values, width, axis=-1, mode="constant", cval=np.inf, origin=-(width // 2))
-    return filtered[..., :count]
+    blocks = -(-(count + width - 1) // width)
+    padded = _pad(values, blocks * width, np.inf)[..., : blocks * width]
+    shaped = padded.reshape(padded.shape[:-1] + (blocks, width))
+    prefix = np.minimum.accumulate(shaped, axis=-1).reshape(padded.shape)
+    suffix = np.minimum.accumulate(shaped[..., ::-1], axis=-1)[..., ::-1].reshape(padded.shape)
+    return np.minimum(suffix[..., :count], prefix[..., width - 1 : width - 1 + count])
 
 
 def suffix_min(values: np.ndarray) -> np.ndarray:

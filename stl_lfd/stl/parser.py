@@ -29,7 +29,7 @@ _READABLE_TERMINALS = {
 
 @cache
 def _parser() -> Lark:
-    return Lark.open("stl.lark", rel_to=__file__, parser="lalr", propagate_positions=True)
+    return Lark.open("stl.lark", rel_to=__file__, parser="lalr", propagate_positions=True, cache=True)
 
 
 def parse(text: str, source: str = "<string>", base_dir: Path | None = None) -> ast.Spec:
