@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from benchmarks._timing import Row, median_seconds, print_table
-from stl_lfd.execution import reference_of
+from stl_lfd.skill.execution import reference_of
 from stl_lfd.hsmm import learn_from_folder
 from stl_lfd.sim import execute, load_scene
 from stl_lfd.sim.panda import PandaWorld

@@ -20,7 +20,6 @@ from typing import Iterator, Optional
 import typer
 from typer.core import TyperArgument, TyperCommand
 
-from stl_lfd import __version__
 from stl_lfd.errors import ExecutionError, ModelError, StlLfdError
 
 class _PlainUsage(TyperCommand):
@@ -91,7 +90,9 @@ def main() -> None:
 
 def _version(value: bool) -> None:
     if value:
-        print(f"stlopt {__version__}")
+        from importlib.metadata import version
+
+        print(f"stlopt {version('stlopt')}")
         raise typer.Exit()
 
 
@@ -120,7 +121,7 @@ def robustness(
     \b
         stlopt robustness specs/example.stl examples/s1.csv --semantics new --json
     """
-    from stl_lfd.evaluate import evaluate_file
+    from stl_lfd.stl.evaluate import evaluate_file
 
     with user_errors():
         result = evaluate_file(spec, signal_csv, semantics.value, nu)
@@ -233,7 +234,7 @@ def rollout(
     """
     import time
 
-    from stl_lfd.execution import rollout_model
+    from stl_lfd.skill.execution import rollout_model
     from stl_lfd.files import check_output_file
     from stl_lfd.hsmm import load_model
     from stl_lfd.signals import write_signal_csv
@@ -311,7 +312,7 @@ def replay(
     """
     import os
 
-    from stl_lfd.replay import ReplayRequest, replay_skill
+    from stl_lfd.report.replay import ReplayRequest, replay_skill
 
     use_gui = gui or (video is None and bool(os.environ.get("DISPLAY")))
     request = ReplayRequest(source, trial, spec, scene, duration, semantics.value if semantics else None)

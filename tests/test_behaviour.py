@@ -5,10 +5,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stl_lfd.behaviour import ActionStep, behaviour_reference, load_behaviour
+from stl_lfd.skill.behaviour import ActionStep, behaviour_reference, load_behaviour
 from stl_lfd.errors import ConfigError
 from stl_lfd.optim import load_task
-from stl_lfd.sim.panda import TIME_STEP
+from stl_lfd.sim import TIME_STEP
 from tests.conftest import ROOT
 
 BEHAVIOUR = ROOT / "configs" / "behaviours" / "pick_insert.yaml"
@@ -77,7 +77,7 @@ def test_task_parameters_must_name_skills_of_the_behaviour(tmp_path):
 
 @pytest.fixture(scope="module")
 def pick_insert_models():
-    from stl_lfd.behaviour import behaviour_models
+    from stl_lfd.skill.behaviour import behaviour_models
 
     return behaviour_models(load_behaviour(BEHAVIOUR))
 

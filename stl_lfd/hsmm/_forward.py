@@ -9,8 +9,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import fftconvolve
-from scipy.stats import norm
 
 
 def hmm_posteriors(
@@ -67,7 +65,9 @@ def duration_pmf(means: np.ndarray, stds: np.ndarray, max_steps: int) -> np.ndar
         normalised to sum to 1.
     """
     edges = np.arange(max_steps + 1) + 0.5  # bin d covers (d - 0.5, d + 0.5]
-    cdf = norm.cdf((edges[None, :] - means[:, None]) / stds[:, None])
+    from scipy.special import ndtr  # the standard normal CDF, without loading scipy.stats
+
+    cdf = ndtr((edges[None, :] - means[:, None]) / stds[:, None])
     pmf = np.diff(cdf, axis=1)
     pmf[:, 0] += cdf[:, 0]  # durations below one step count as one step
     return pmf / np.maximum(pmf.sum(axis=1, keepdims=True), 1e-300)
@@ -123,6 +123,8 @@ def _occupancy_from_entries(startprob: np.ndarray, entries: np.ndarray, survival
     occupancy = startprob[:, None] * kernel  # pi_i P_i(>= t + 1)
     shifted = np.zeros((states, steps))
     shifted[:, 1:] = entries[:-1].T  # S_{t-1} enters at t
+    from scipy.signal import fftconvolve
+
     occupancy += fftconvolve(shifted, kernel, axes=1)[:, :steps]
     occupancy = np.clip(occupancy.T, 0.0, None)
     return occupancy / np.maximum(occupancy.sum(axis=1, keepdims=True), 1e-300)

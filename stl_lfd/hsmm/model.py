@@ -11,7 +11,6 @@ import logging
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import multivariate_normal
 
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm._forward import duration_pmf, hmm_posteriors, state_occupancy
@@ -253,6 +252,8 @@ class HSMM:
     def _frame_likelihood(self, padded: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """`B x T x K` Gaussian likelihoods divided by their largest value per frame, and the
         `B x T` logs of those divisors (which the log-likelihood adds back)."""
+        from scipy.stats import multivariate_normal  # loaded by learning only
+
         log_likelihood = np.stack(
             [multivariate_normal(self.means_[k], self.covars_[k], allow_singular=True).logpdf(padded) for k in range(self.n_states)],
             axis=-1,

@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import CubicHermiteSpline
 
 from stl_lfd.errors import ModelError
 from stl_lfd.limits import samples_problem
@@ -87,6 +86,8 @@ def _resample(
     times: np.ndarray, positions: np.ndarray, velocities: np.ndarray, states: np.ndarray, rate: float, duration: float, names: list[str]
 ) -> Trajectory:
     new_times = np.arange(int(np.floor(duration * rate + 1e-9)) + 1) / rate
+    from scipy.interpolate import CubicHermiteSpline
+
     spline = CubicHermiteSpline(times, positions, velocities, axis=0)
     nearest = np.minimum(np.round(new_times / (times[1] - times[0])).astype(int), len(states) - 1)
     return Trajectory(new_times, spline(new_times), spline(new_times, 1), states[nearest], list(names))

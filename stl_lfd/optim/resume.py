@@ -42,7 +42,7 @@ def fingerprint(task: Task) -> dict[str, str]:
 
     digests = {"spec": _digest(format_spec(load_spec(task.spec))), "scene": _digest(repr(load_scene(task.scene)))}
     if task.behaviour is not None:
-        from stl_lfd.behaviour import load_behaviour
+        from stl_lfd.skill.behaviour import load_behaviour
 
         digests["behaviour"] = _digest(repr(load_behaviour(task.behaviour)))
     return digests

@@ -10,7 +10,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from stl_lfd.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
+from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
 from stl_lfd.errors import ConfigError, RunError, SpecError
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
 from stl_lfd.optim.loop import Outcome, Trial, best_trial, run_trials
@@ -18,7 +18,7 @@ from stl_lfd.optim.resume import check_resume, inputs_record
 from stl_lfd.optim.rundir import RunDirectory, check_new_run_path
 from stl_lfd.optim.space import SearchSpace, build_search_space
 from stl_lfd.optim.task import SINGLE_SKILL, Task
-from stl_lfd.sim import Scene, execute, load_scene
+from stl_lfd.sim import RECORDED_SIGNALS, Scene, execute, load_scene
 from stl_lfd.stl import SpecParts, compile_spec, load_spec, split_spec
 
 
@@ -81,7 +81,7 @@ def objective_for(task: Task, models: dict[str, HSMM]) -> tuple[SearchSpace, Ski
             f"{task.source}: the spec {task.spec.name} looks {robustness.horizon:g} s ahead but rollouts last "
             f"{task.duration:g} s ('duration'); lengthen the rollouts or shorten the spec's windows"
         )
-    recorded = {"x", "y", "z", "gripper", "force"}
+    recorded = set(RECORDED_SIGNALS)
     unknown = sorted(set(robustness.signals) - recorded)
     if unknown:
         raise SpecError(f"signal {', '.join(unknown)} is not recorded by rollouts (they record {', '.join(sorted(recorded))})", str(task.spec))

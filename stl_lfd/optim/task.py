@@ -177,7 +177,7 @@ def check_budget(optimizer: Optimizer, path: Path) -> None:
 
 
 def _behaviour_scene(behaviour: Path) -> str:
-    from stl_lfd.behaviour import load_behaviour
+    from stl_lfd.skill.behaviour import load_behaviour
 
     return load_behaviour(behaviour).scene
 
@@ -186,7 +186,7 @@ def _skill_parameters(data: Any, path: Path, behaviour: Path | None) -> dict[str
     """`parameters` of a single-skill task, or per skill of a behaviour."""
     if behaviour is None:
         return {SINGLE_SKILL: _parameters(data, path, "parameters")}
-    from stl_lfd.behaviour import load_behaviour
+    from stl_lfd.skill.behaviour import load_behaviour
 
     skills = [step.name for step in load_behaviour(behaviour).skills]
     check_keys(data, skills, path, "parameters")

@@ -63,7 +63,7 @@ def load_run(path: Path) -> RunData:
     run = RunDirectory.open(path)
     task, models = run.task(), run.models()
     if task.behaviour is not None:  # in the order the behaviour runs them
-        from stl_lfd.behaviour import load_behaviour
+        from stl_lfd.skill.behaviour import load_behaviour
 
         order = [step.name for step in load_behaviour(task.behaviour).skills]
         models = {name: models[name] for name in order if name in models}

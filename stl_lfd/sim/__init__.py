@@ -16,7 +16,7 @@ from typing import Callable, Protocol
 
 from stl_lfd.errors import ExecutionError
 from stl_lfd.sim.kinematic import KinematicBackend
-from stl_lfd.sim.reference import Reference, Rollout, TrackingWarning, warn_if_untracked
+from stl_lfd.sim.reference import RECORDED_SIGNALS, SIMULATION_RATE, TIME_STEP, Reference, Rollout, TrackingWarning, warn_if_untracked
 from stl_lfd.sim.scene import Scene, builtin_scenes, load_scene
 
 BACKENDS = ("pybullet", "kinematic")
@@ -73,6 +73,9 @@ def execute(
 
 __all__ = [
     "BACKENDS",
+    "RECORDED_SIGNALS",
+    "SIMULATION_RATE",
+    "TIME_STEP",
     "Backend",
     "DEFAULT_RATE",
     "Reference",

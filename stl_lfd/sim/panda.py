@@ -25,10 +25,9 @@ import numpy as np
 
 from stl_lfd.errors import ExecutionError
 from stl_lfd.signals import SignalTable
-from stl_lfd.sim.reference import Reference, Rollout, recording_times
+from stl_lfd.sim.reference import TIME_STEP, Reference, Rollout, recording_times
 from stl_lfd.sim.scene import Camera, Region, Scene, SceneObject
 
-TIME_STEP = 1.0 / 240.0
 END_EFFECTOR_LINK = 11
 ARM_JOINTS = list(range(7))
 FINGER_JOINTS = [9, 10]

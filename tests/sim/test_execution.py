@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from stl_lfd.errors import ExecutionError
-from stl_lfd.execution import reference_of, rollout_model
+from stl_lfd.skill.execution import reference_of, rollout_model
 from stl_lfd.sim import Reference, TrackingWarning, execute, load_scene
 
 SCENE = load_scene("free_space")

@@ -20,10 +20,9 @@ from typing import Any
 import numpy as np
 
 from stl_lfd.errors import ConfigError
-from stl_lfd.execution import reference_of
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
-from stl_lfd.sim import Reference
-from stl_lfd.sim.panda import TIME_STEP
+from stl_lfd.sim import TIME_STEP, Reference
+from stl_lfd.skill.execution import reference_of
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
 ACTIONS = ("grasp", "release")

@@ -11,8 +11,7 @@ from typing import Callable
 
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm import HSMM, retrieve
-from stl_lfd.sim import DEFAULT_RATE, Reference, Rollout, Scene, execute, load_scene
-from stl_lfd.sim.panda import TIME_STEP
+from stl_lfd.sim import DEFAULT_RATE, SIMULATION_RATE, Reference, Rollout, Scene, execute, load_scene
 
 POSITION_SIGNALS = ("x", "y", "z")
 
@@ -22,7 +21,7 @@ def reference_of(model: HSMM, duration: float | None = None) -> Reference:
     missing = [name for name in POSITION_SIGNALS if name not in model.signal_names_]
     if missing:
         raise ModelError(f"the model has no signal {', '.join(missing)}: only position skills (x, y, z) can be executed")
-    trajectory = retrieve(model, duration, rate=1.0 / TIME_STEP)
+    trajectory = retrieve(model, duration, rate=SIMULATION_RATE)
     columns = [model.signal_names_.index(name) for name in POSITION_SIGNALS]
     gripper = trajectory.positions[:, model.signal_names_.index("gripper")] if "gripper" in model.signal_names_ else None
     return Reference(trajectory.times, trajectory.positions[:, columns], gripper)
