@@ -1,3 +1,55 @@
-"""stlopt: adapt demonstrated robot skills to Signal Temporal Logic requirements."""
+"""stlopt: adapt demonstrated robot skills to Signal Temporal Logic requirements.
+
+The public API, loaded on first use (so `import stl_lfd` loads neither torch nor pybullet):
+
+- STL: `Spec` (`Spec.parse`, `Spec.load`, `.robustness`, `.trace`, `.components`), `compile_spec`;
+- signals: `SignalTable`, `read_signal_csv`, `write_signal_csv`;
+- skills: `HSMM` (`fit`, `predict`, `sample`), `learn_from_folder`, `load_model`, `save_model`,
+  `retrieve`; `load_scene`, `execute`, `rollout_model`;
+- optimisation: `optimize` -> `Result`, with `Parameters`, `MeanParameters`,
+  `DurationParameters` and `Optimizer`; `load_task` for task files.
+"""
+
+from __future__ import annotations
+
+from importlib import import_module
+from typing import Any
 
 __version__ = "0.1.0"
+
+_HOMES = {
+    "Spec": "stl_lfd.stl",
+    "compile_spec": "stl_lfd.stl",
+    "SignalTable": "stl_lfd.signals",
+    "read_signal_csv": "stl_lfd.signals",
+    "write_signal_csv": "stl_lfd.signals",
+    "HSMM": "stl_lfd.hsmm",
+    "learn_from_folder": "stl_lfd.hsmm",
+    "load_model": "stl_lfd.hsmm",
+    "save_model": "stl_lfd.hsmm",
+    "retrieve": "stl_lfd.hsmm",
+    "load_scene": "stl_lfd.sim",
+    "execute": "stl_lfd.sim",
+    "rollout_model": "stl_lfd.skill",
+    "optimize": "stl_lfd.optim.api",
+    "Result": "stl_lfd.optim.api",
+    "Parameters": "stl_lfd.optim.task",
+    "MeanParameters": "stl_lfd.optim.task",
+    "DurationParameters": "stl_lfd.optim.task",
+    "Optimizer": "stl_lfd.optim.task",
+    "load_task": "stl_lfd.optim.task",
+}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _HOMES:
+        raise AttributeError(f"module 'stl_lfd' has no attribute {name!r}")
+    value = getattr(import_module(_HOMES[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(list(globals()) + __all__)

@@ -19,7 +19,7 @@ from stl_lfd.optim.rundir import RunDirectory, check_new_run_path
 from stl_lfd.optim.space import SearchSpace, build_search_space
 from stl_lfd.optim.task import SINGLE_SKILL, Task
 from stl_lfd.sim import RECORDED_SIGNALS, Scene, execute, load_scene
-from stl_lfd.stl import SpecParts, compile_spec, load_spec, split_spec
+from stl_lfd.stl import SpecParts, ast, compile_spec, load_spec, split_spec
 
 
 class SkillObjective:
@@ -70,11 +70,12 @@ def task_models(task: Task) -> dict[str, HSMM]:
     return {SINGLE_SKILL: load_model(task.model)}
 
 
-def objective_for(task: Task, models: dict[str, HSMM]) -> tuple[SearchSpace, SkillObjective]:
-    """The parameter space and the objective of `task`; spec problems are found here, before
-    any trial: unknown signals, and windows that reach past the rollout duration."""
+def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = None) -> tuple[SearchSpace, SkillObjective]:
+    """The parameter space and the objective of `task` (with `spec` instead of reading
+    `task.spec` when given); spec problems are found here, before any trial: unknown signals,
+    and windows that reach past the rollout duration."""
     space = build_search_space(models, task.parameters, task.source)
-    spec = load_spec(task.spec)
+    spec = load_spec(task.spec) if spec is None else spec
     robustness = compile_spec(spec, task.semantics, task.nu, source=str(task.spec))
     if robustness.horizon > task.duration + 1e-9:
         raise ConfigError(
@@ -101,7 +102,7 @@ def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lam
     space, objective = objective_for(task, models)
     start = time.perf_counter()
     initial = objective.evaluate(models)
-    summary = _summary(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
+    summary = summary_of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
     inputs = inputs if inputs is not None else inputs_record(task, {}, task)
     run = RunDirectory.create(out, task, models, initial.payload, summary, inputs)
     return PreparedRun(task, run, models, space, objective, [], summary)
@@ -152,19 +153,19 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
             best = trial
             run.write_best_models(space.apply(prepared.models, trial.x))
         history.append(trial)
-        run.write_summary(_summary(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components))
+        run.write_summary(summary_of(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components))
         on_trial(trial, best)
 
     history = list(prepared.history)
     if best is not None and not run.has_best_models():
         run.write_best_models(space.apply(prepared.models, best.x))
     run_trials(prepared.objective, space.bounds, task.optimizer, prepared.history, record, prepared.objective.parts)
-    summary = _summary(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components)
+    summary = summary_of(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components)
     run.write_summary(summary)
     return summary
 
 
-def _summary(
+def summary_of(
     task: Task, space: SearchSpace, initial_robustness: float, history: list[Trial], wall_seconds: float, initial_components: dict[str, float] | None = None
 ) -> dict[str, Any]:
     best = best_trial(history)

@@ -7,9 +7,10 @@ types and bounds that make no sense are `ConfigError`s naming the file and the k
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_SEED, MAX_STATES, MAX_TRIALS, samples_problem
@@ -59,6 +60,21 @@ class Optimizer:
     seed: int = 0
     xi: float = 0.1
 
+    def __post_init__(self) -> None:
+        """Refuse settings that make no sense, from a task file, the command line or Python."""
+        if self.method not in METHODS:
+            raise ConfigError(f"'optimizer.method' must be one of {', '.join(METHODS)} (got {shown(self.method)})")
+        if self.initial < 1 or self.trials < 1:
+            raise ConfigError("'optimizer.initial' and 'optimizer.trials' must be at least 1")
+        if self.initial > self.trials:
+            raise ConfigError(f"'optimizer.initial' ({self.initial}) exceeds 'optimizer.trials' ({self.trials}), the total number of trials")
+        if self.trials > MAX_TRIALS:
+            raise ConfigError(f"'optimizer.trials' ({self.trials}) is above the limit of {MAX_TRIALS} trials")
+        if not 0 <= self.seed <= MAX_SEED:
+            raise ConfigError(f"'optimizer.seed' must be from 0 to {MAX_SEED} (got {shown(self.seed)})")
+        if not self.xi >= 0:
+            raise ConfigError(f"'optimizer.xi' must be at least 0 (got {self.xi})")
+
 
 @dataclass(frozen=True)
 class Task:
@@ -88,10 +104,9 @@ class Task:
     def with_overrides(self, **changes: Any) -> "Task":
         """A copy with command-line overrides (`spec`, `backend`, `seed`, `initial`, `trials`, `method`)."""
         optimizer_keys = {"seed", "initial", "trials", "method"}
-        optimizer = replace(self.optimizer, **{k: v for k, v in changes.items() if k in optimizer_keys and v is not None})
-        task = replace(self, optimizer=optimizer, **{k: v for k, v in changes.items() if k not in optimizer_keys and v is not None})
-        check_budget(task.optimizer, task.source)
-        return task
+        with _located(self.source):
+            optimizer = replace(self.optimizer, **{k: v for k, v in changes.items() if k in optimizer_keys and v is not None})
+        return replace(self, optimizer=optimizer, **{k: v for k, v in changes.items() if k not in optimizer_keys and v is not None})
 
     def to_yaml_dict(self) -> dict[str, Any]:
         """The task as it is used, in the task-file format (paths made absolute)."""
@@ -155,25 +170,19 @@ def load_task(path: str | Path) -> Task:
         optimizer=_optimizer(data.get("optimizer", {}), path),
         source=path,
     )
-    check_budget(task.optimizer, path)
     problem = samples_problem(task.duration, task.rate)
     if problem:
         raise ConfigError(f"{path}: 'duration' and 'rate': {problem}")
     return task
 
 
-def check_budget(optimizer: Optimizer, path: Path) -> None:
-    """The budget and seed, from the file or the command line (--init, --iterations, --seed)."""
-    if optimizer.initial < 1 or optimizer.trials < 1:
-        raise ConfigError(f"{path}: 'optimizer.initial' and 'optimizer.trials' must be at least 1")
-    if optimizer.trials > MAX_TRIALS:
-        raise ConfigError(f"{path}: 'optimizer.trials' ({optimizer.trials}) is above the limit of {MAX_TRIALS} trials")
-    if not 0 <= optimizer.seed <= MAX_SEED:
-        raise ConfigError(f"{path}: 'optimizer.seed' must be from 0 to {MAX_SEED} (got {shown(optimizer.seed)})")
-    if optimizer.initial > optimizer.trials:
-        raise ConfigError(
-            f"{path}: 'optimizer.initial' ({optimizer.initial}) exceeds 'optimizer.trials' ({optimizer.trials}), the total number of trials"
-        )
+@contextmanager
+def _located(path: Path) -> Iterator[None]:
+    """Prefix the ConfigErrors raised inside with the file they are about."""
+    try:
+        yield
+    except ConfigError as error:
+        raise ConfigError(f"{path}: {error}") from None
 
 
 def _behaviour_scene(behaviour: Path) -> str:
@@ -229,13 +238,15 @@ def _parameters(data: Any, path: Path, where: str) -> Parameters:
 def _optimizer(data: Any, path: Path) -> Optimizer:
     check_keys(data, ("method", "initial", "trials", "seed", "xi"), path, "optimizer")
     defaults = Optimizer()
-    return Optimizer(
+    settings = dict(
         method=_choice(data.get("method", defaults.method), METHODS, path, "optimizer.method"),
         initial=integer(data.get("initial", defaults.initial), path, "optimizer.initial", minimum=1),
         trials=integer(data.get("trials", defaults.trials), path, "optimizer.trials", minimum=1),
         seed=integer(data.get("seed", defaults.seed), path, "optimizer.seed", minimum=0, maximum=MAX_SEED),
         xi=number(data.get("xi", defaults.xi), path, "optimizer.xi", minimum=0.0),
     )
+    with _located(path):
+        return Optimizer(**settings)
 
 
 def _components(value: Any, path: Path, key: str, allow_all: bool) -> tuple[int, ...] | str:

@@ -4,10 +4,12 @@ a conjunction (`split_spec`)."""
 from stl_lfd.stl.components import SpecParts, split_spec
 from stl_lfd.stl.parser import load_spec, parse, resolve
 from stl_lfd.stl.printer import format_formula, format_spec
-from stl_lfd.stl.robustness import SEMANTICS, HorizonWarning, Robustness, Semantics, compile_spec, horizon
+from stl_lfd.stl.robustness import SEMANTICS, CostWarning, HorizonWarning, Robustness, Semantics, compile_spec, horizon
+from stl_lfd.stl.spec import Spec
 
 __all__ = [
     "SEMANTICS",
+    "CostWarning",
     "HorizonWarning",
     "Robustness",
     "Semantics",
@@ -19,5 +21,6 @@ __all__ = [
     "parse",
     "resolve",
     "split_spec",
+    "Spec",
     "SpecParts",
 ]

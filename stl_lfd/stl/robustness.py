@@ -31,7 +31,7 @@ from stl_lfd.stl._numerics import (
     window_min,
     window_reduce,
 )
-from stl_lfd.stl.parser import resolve
+from stl_lfd.stl.parser import parse, resolve
 from stl_lfd.stl.printer import format_formula
 
 SemanticsName = Literal["classic", "new"]
@@ -185,9 +185,12 @@ class Robustness:
 
 
 def compile_spec(
-    spec: ast.Spec | ast.Formula, semantics: SemanticsName | Semantics = "classic", nu: float = 1.0, source: str = "<string>"
+    spec: str | ast.Spec | ast.Formula, semantics: SemanticsName | Semantics = "classic", nu: float = 1.0, source: str = "<string>"
 ) -> Robustness:
-    """Compile a parsed specification (or a formula) into its robustness function."""
+    """Compile a specification (STL text, a parsed spec or a formula) into its robustness
+    function."""
+    if isinstance(spec, str):
+        spec = parse(spec, source)
     if not isinstance(semantics, Semantics):
         semantics = Semantics(semantics, nu)
     formula = resolve(spec) if isinstance(spec, ast.Spec) else spec

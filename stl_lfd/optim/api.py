@@ -1,0 +1,141 @@
+"""`optimize`: the optimisation from Python objects, kept in memory.
+
+    from stl_lfd import HSMM, Spec, optimize, Parameters, MeanParameters, Optimizer
+
+    result = optimize(model, Spec.load("specs/phi1.stl"), Parameters(means=MeanParameters((2, 3))),
+                      Optimizer(trials=16), duration=22, backend="kinematic")
+    result.best_robustness, result.best_model
+
+The same seed gives the same trials as `stlopt optimize` on a task file with the same settings.
+To record a run directory (resumable, for `stlopt report`), use a task file with
+`stlopt optimize`, or `start_run` and `optimise` from `stl_lfd.optim`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from stl_lfd.errors import ConfigError
+from stl_lfd.hsmm import HSMM
+from stl_lfd.limits import samples_problem
+from stl_lfd.optim.loop import Trial, best_trial
+from stl_lfd.optim.run import PreparedRun, objective_for, optimise, summary_of
+from stl_lfd.optim.task import SINGLE_SKILL, Optimizer, Parameters, Task
+from stl_lfd.signals import SignalTable
+from stl_lfd.stl import Spec
+
+
+@dataclass
+class Result:
+    """What an optimisation found.
+
+    Attributes:
+        best_models: skill name -> adapted model of the best trial (`skill` for one skill); the
+            unoptimised models when no trial succeeded.
+        best_robustness: robustness of the best trial, None when every trial failed.
+        best_trial: the best `Trial`, or None.
+        initial_robustness: robustness of the unoptimised skill.
+        history: every trial in order.
+        summary: the fields of a run's `summary.json`.
+        signals: trial number -> recorded signals (0 is the unoptimised skill).
+    """
+
+    best_models: dict[str, HSMM]
+    best_robustness: float | None
+    best_trial: Trial | None
+    initial_robustness: float
+    history: list[Trial]
+    summary: dict[str, Any]
+    signals: dict[int, SignalTable] = field(default_factory=dict, repr=False)
+
+    @property
+    def best_model(self) -> HSMM:
+        """The adapted model of a single-skill optimisation."""
+        if SINGLE_SKILL not in self.best_models:
+            raise ConfigError(f"several skills were optimised ({', '.join(self.best_models)}): use best_models")
+        return self.best_models[SINGLE_SKILL]
+
+    @property
+    def satisfied(self) -> bool:
+        return self.best_robustness is not None and self.best_robustness > 0
+
+
+class MemoryRun:
+    """The recording side of a run, kept in memory (what `RunDirectory` writes to disk)."""
+
+    def __init__(self, initial_signals: SignalTable) -> None:
+        self.signals: dict[int, SignalTable] = {0: initial_signals}
+        self.trials: list[Trial] = []
+        self.best_models: dict[str, HSMM] | None = None
+        self.summary: dict[str, Any] = {}
+        self.path = Path("<memory>")
+
+    def append_trial(self, trial: Trial, signals: SignalTable | None) -> None:
+        self.trials.append(trial)
+        if signals is not None:
+            self.signals[trial.trial] = signals
+
+    def write_best_models(self, models: dict[str, HSMM]) -> None:
+        self.best_models = models
+
+    def has_best_models(self) -> bool:
+        return self.best_models is not None
+
+    def write_summary(self, summary: dict[str, Any]) -> None:
+        self.summary = summary
+
+    def close(self) -> None:
+        pass
+
+
+def optimize(
+    models: HSMM | dict[str, HSMM],
+    spec: Spec | str | Path,
+    parameters: Parameters | dict[str, Parameters],
+    optimizer: Optimizer | None = None,
+    *,
+    duration: float,
+    scene: str = "free_space",
+    backend: str = "pybullet",
+    semantics: str = "new",
+    nu: float = 1.0,
+    rate: float = 100.0,
+    behaviour: str | Path | None = None,
+    on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None,
+) -> Result:
+    """Adapt `models` so that their execution satisfies `spec`, as robustly as possible.
+
+    Args:
+        models: the skill, or skill name -> model for a `behaviour` of several skills.
+        spec: a `Spec`, STL text, or the path of a `.stl` file.
+        parameters: what moves (means, durations, transitions) and its bounds; per skill name
+            for a behaviour.
+        optimizer: method, initial (M) and total (N) trials, seed (default `Optimizer()`).
+        duration: seconds of each rollout (the spec's windows must fit in it).
+        on_trial: called after each trial with it and the best trial so far.
+
+    Returns:
+        the best models and robustness, the history of trials and the summary.
+    """
+    spec = spec if isinstance(spec, Spec) else Spec.load(spec) if isinstance(spec, Path) else Spec.parse(spec)
+    models = models if isinstance(models, dict) else {SINGLE_SKILL: models}
+    parameters = parameters if isinstance(parameters, dict) else {SINGLE_SKILL: parameters}
+    problem = samples_problem(duration, rate)
+    if problem:
+        raise ConfigError(f"duration and rate: {problem}")
+    task = Task(
+        name="python", spec=Path(spec.source), model=None, demos=None, behaviour=Path(behaviour) if behaviour is not None else None, states=0,
+        scene=scene, backend=backend, semantics=semantics, nu=nu, duration=float(duration), rate=float(rate),
+        parameters=parameters, optimizer=optimizer or Optimizer(), source=Path("<python>"),
+    )  # fmt: skip
+    space, objective = objective_for(task, models, spec.tree)
+    start = time.perf_counter()
+    initial = objective.evaluate(models)
+    summary = summary_of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
+    record = MemoryRun(initial.payload)
+    summary = optimise(PreparedRun(task, record, models, space, objective, [], summary), on_trial)
+    best = best_trial(record.trials)
+    return Result(record.best_models or models, summary["best_robustness"], best, summary["initial_robustness"], record.trials, summary, record.signals)

@@ -1,0 +1,78 @@
+"""The public Python API: the README's examples run, `optimize` from objects reproduces the
+command line's trials, and settings are checked when objects are made."""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+import subprocess
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import stl_lfd
+from stl_lfd.cli import app
+from stl_lfd.errors import ConfigError
+from tests.conftest import ROOT
+from tests.optim.test_run import small_task
+
+
+def readme_python_blocks() -> list[str]:
+    text = (ROOT / "README.md").read_text()
+    section = text[text.index("## Python API") :]
+    section = section[: section.index("\n## ", 1)]
+    return re.findall(r"```python\n(.*?)```", section, flags=re.S)
+
+
+def test_the_readme_python_examples_run(monkeypatch, capsys):
+    blocks = readme_python_blocks()
+    assert len(blocks) == 3
+    monkeypatch.chdir(ROOT)
+    namespace: dict = {}
+    for block in blocks:
+        exec(compile(block, "README.md", "exec"), namespace)
+    printed = capsys.readouterr().out.splitlines()
+    assert float(printed[1]) == pytest.approx(-0.31)
+    assert namespace["result"].best_robustness >= namespace["result"].initial_robustness
+    assert len(namespace["result"].history) == 6
+
+
+def test_import_stl_lfd_is_lazy():
+    code = "import sys, stl_lfd; stl_lfd.Spec; print(any(m in sys.modules for m in ('torch', 'pybullet', 'botorch')))"
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip() == "False"
+    assert set(stl_lfd.__all__) <= set(dir(stl_lfd))
+    with pytest.raises(AttributeError):
+        stl_lfd.nothing_here
+
+
+def test_optimize_from_objects_reproduces_the_command_lines_trials(tmp_path, learned_model, learned_model_file):
+    task = small_task(tmp_path, learned_model_file)  # kinematic, 50 Hz, 22 s, means of 2-3 and all durations, 3 + 2 trials, seed 2
+    assert CliRunner().invoke(app, ["optimize", str(task), "--out", str(tmp_path / "run")]).exit_code == 0
+    recorded = [json.loads(line) for line in (tmp_path / "run" / "trials.jsonl").read_text().splitlines()]
+    # No file: the spec as text (phi1 with its regions written out), the model as an object.
+    regions = (ROOT / "specs" / "regions.stl").read_text()
+    phi1 = "\n".join(line for line in (ROOT / "specs" / "phi1.stl").read_text().splitlines() if not line.startswith("include"))
+    result = stl_lfd.optimize(
+        learned_model,
+        stl_lfd.Spec.parse(regions + "\n" + phi1),
+        stl_lfd.Parameters(means=stl_lfd.MeanParameters(components=(2, 3)), durations=stl_lfd.DurationParameters(components="all")),
+        stl_lfd.Optimizer(initial=3, trials=5, seed=2),
+        duration=22,
+        rate=50,
+        backend="kinematic",
+    )
+    assert [trial.robustness for trial in result.history] == [line["robustness"] for line in recorded]
+    assert all(np.array_equal(trial.x, line["x"]) for trial, line in zip(result.history, recorded))
+    assert result.best_robustness == max(line["robustness"] for line in recorded)
+    assert result.best_model.n_states == learned_model.n_states
+
+
+def test_settings_are_checked_when_objects_are_made():
+    with pytest.raises(ConfigError, match="exceeds"):
+        stl_lfd.Optimizer(initial=10, trials=5)
+    with pytest.raises(ConfigError, match="method"):
+        stl_lfd.Optimizer(method="magic")
+    with pytest.raises(ConfigError, match="seed"):
+        stl_lfd.Optimizer(seed=-1)
