@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run test test-fast bench bench-optim clean
+.PHONY: run test test-fast lint bench bench-optim clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -28,11 +28,15 @@ run: $(STAMP)
 	@echo "summary.json, trials.jsonl and signals/, and the figures in $(RUN_DIR)/phi1/report/index.html."
 	@echo "Watch the result: $(BIN)/stlopt replay $(RUN_DIR)/phi1 --video $(RUN_DIR)/phi1-best.mp4"
 
-test: $(STAMP)
+test: $(STAMP) lint
 	$(BIN)/python -m pytest -q
 
-test-fast: $(STAMP)
+test-fast: $(STAMP) lint
 	$(BIN)/python -m pytest -q -m "not slow"
+
+lint: $(STAMP)
+	$(BIN)/ruff check stl_lfd tests benchmarks
+	$(BIN)/ruff format --check stl_lfd tests benchmarks
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks

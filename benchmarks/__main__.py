@@ -1,9 +1,10 @@
 """`make bench`: run every benchmark and print its table."""
 
-from benchmarks import bench_hsmm, bench_optim, bench_sim, bench_stl
+from benchmarks import bench_cli, bench_hsmm, bench_optim, bench_sim, bench_stl
 
 
 def main() -> None:
+    bench_cli.main()
     bench_stl.main()
     bench_hsmm.main()
     bench_sim.main()

@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
 import statistics
 import tempfile
 import time
 import warnings
-import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -110,7 +110,13 @@ def main(argv: list[str] | None = None) -> None:
     print_table(
         "Optimiser timing",
         [
-            Row("stl overhead per trial", "median inside a phi2 pybullet run", inside["optimizer_median"], inside["rollout_median"], "target: the run's median rollout"),
+            Row(
+                "stl overhead per trial",
+                "median inside a phi2 pybullet run",
+                inside["optimizer_median"],
+                inside["rollout_median"],
+                "target: the run's median rollout",
+            ),
             Row("pi overhead per trial", "GP fit + PI, synthetic n = 30, d = 21", overhead, 0.5),
             Row("phi1 run, pybullet, stl", "learn + initial + 32 trials", whole_seconds, 120.0, f"best {whole['best_robustness']:+.4f}"),
         ],

@@ -10,9 +10,9 @@ About 4 minutes per spec on 2 cores (two runs side by side).
 from __future__ import annotations
 
 import argparse
+import multiprocessing
 import tempfile
 import warnings
-import multiprocessing
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -73,8 +73,14 @@ def main(argv: list[str] | None = None) -> None:
         after_force = "-" if r["after"][0] is None else f"{r['after'][0]:.1f}"
         after_pick = "-" if r["after"][1] is None else f"{r['after'][1]:.1f}"
         table.add_row(
-            r["spec"], str(r["seed"]), "yes" if r["satisfied"] else "no", str(r["first_satisfied_trial"] or "-"),
-            f"{r['before'][0]:.1f} → {after_force}", f"{r['before'][1]:.1f} → {after_pick}", str(r["visited"]), f"{r['wall_seconds']:.0f} s",
+            r["spec"],
+            str(r["seed"]),
+            "yes" if r["satisfied"] else "no",
+            str(r["first_satisfied_trial"] or "-"),
+            f"{r['before'][0]:.1f} → {after_force}",
+            f"{r['before'][1]:.1f} → {after_pick}",
+            str(r["visited"]),
+            f"{r['wall_seconds']:.0f} s",
         )
     Console(width=150).print(table)
 

@@ -7,10 +7,10 @@ import time
 from pathlib import Path
 
 from benchmarks._timing import Row, median_seconds, print_table
-from stl_lfd.skill.execution import reference_of
 from stl_lfd.hsmm import learn_from_folder
 from stl_lfd.sim import execute, load_scene
 from stl_lfd.sim.panda import PandaWorld
+from stl_lfd.skill.execution import reference_of
 
 ROOT = Path(__file__).resolve().parent.parent
 SECONDS = 20.0
@@ -32,10 +32,22 @@ def main() -> None:
     print_table(
         "Execution (free-space scene, 240 Hz simulation, recorded at 100 Hz)",
         [
-            Row("pybullet rollout", "20 s, 4,800 steps", pybullet_seconds, 1.3, f"{SECONDS / pybullet_seconds:.0f}x real time; tracking RMS {1000 * rollout.tracking_rms:.2f} mm"),
+            Row(
+                "pybullet rollout",
+                "20 s, 4,800 steps",
+                pybullet_seconds,
+                1.3,
+                f"{SECONDS / pybullet_seconds:.0f}x real time; tracking RMS {1000 * rollout.tracking_rms:.2f} mm",
+            ),
             Row("kinematic rollout", "20 s", kinematic_seconds, None),
             Row("pybullet world set-up", "once per process and scene", setup, None),
-            Row("video frame", f"{scene.camera.width} x {scene.camera.height}", frame_seconds, None, f"{scene.camera.fps:g} fps video: {SECONDS * scene.camera.fps * frame_seconds:.0f} s to film 20 s"),
+            Row(
+                "video frame",
+                f"{scene.camera.width} x {scene.camera.height}",
+                frame_seconds,
+                None,
+                f"{scene.camera.fps:g} fps video: {SECONDS * scene.camera.fps * frame_seconds:.0f} s to film 20 s",
+            ),
         ],
     )
 

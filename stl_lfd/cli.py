@@ -20,7 +20,9 @@ from typing import Iterator, Optional
 import typer
 from typer.core import TyperArgument, TyperCommand
 
+from stl_lfd.choices import BACKENDS, METHODS, SEMANTICS
 from stl_lfd.errors import ExecutionError, ModelError, StlLfdError
+
 
 class _PlainUsage(TyperCommand):
     """Usage lines in the usual form, `stlopt optimize [OPTIONS] TASK_FILE`, which a user can copy."""
@@ -40,14 +42,14 @@ app = typer.Typer(
 )
 
 
-class SemanticsOption(str, Enum):
-    classic = "classic"
-    new = "new"
+def _choices(name: str, values: tuple[str, ...]) -> type[Enum]:
+    """A command-line choice built from the library's own list of values (one definition)."""
+    return Enum(name, [(value, value) for value in values], type=str)
 
 
-class BackendOption(str, Enum):
-    pybullet = "pybullet"
-    kinematic = "kinematic"
+SemanticsOption = _choices("SemanticsOption", SEMANTICS)
+BackendOption = _choices("BackendOption", BACKENDS)
+MethodOption = _choices("MethodOption", METHODS)
 
 
 def _print_warning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -137,7 +139,9 @@ def learn(
     demos_dir: Path = typer.Argument(..., metavar="DEMOS_DIR", help="Folder of demonstration CSVs (t,x,y,z[,...])."),
     states: int = typer.Option(6, "-K", "--states", help="Number of HSMM states K."),
     output: Path = typer.Option(Path("model.npz"), "-o", "--output", help="Model file to write (.npz)."),
-    sample_period: Optional[float] = typer.Option(None, "--sample-period", help="Resample the demos to this period in seconds (default: their median period, at most 50 Hz)."),
+    sample_period: Optional[float] = typer.Option(
+        None, "--sample-period", help="Resample the demos to this period in seconds (default: their median period, at most 50 Hz)."
+    ),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Also draw demos, states and retrieval into this PNG."),
 ) -> None:
     """Learn a skill model (HSMM) from demonstrations and write the model file.
@@ -234,11 +238,11 @@ def rollout(
     """
     import time
 
-    from stl_lfd.skill.execution import rollout_model
     from stl_lfd.files import check_output_file
     from stl_lfd.hsmm import load_model
     from stl_lfd.signals import write_signal_csv
     from stl_lfd.sim import load_scene
+    from stl_lfd.skill.execution import rollout_model
 
     with user_errors():
         _check_duration_and_rate(duration, rate)
@@ -327,13 +331,6 @@ def replay(
         print(f"{'satisfied' if outcome.robustness > 0 else 'violated'} ({outcome.semantics} robustness of {outcome.spec})", file=sys.stderr)
 
 
-class MethodOption(str, Enum):
-    stl = "stl"
-    pi = "pi"
-    logei = "logei"
-    random = "random"
-
-
 @app.command(cls=_PlainUsage)
 def optimize(
     task_file: Path = typer.Argument(..., metavar="TASK_FILE", help="Task file (YAML), e.g. configs/phi1.yaml."),
@@ -344,7 +341,9 @@ def optimize(
     out: Optional[Path] = typer.Option(None, "--out", help="Run directory (default: runs/<task name>)."),
     resume: bool = typer.Option(False, "--resume", help="Continue the run in --out (or runs/<task name>) where it stopped."),
     backend: Optional[BackendOption] = typer.Option(None, help="Execution backend (default: the task's)."),
-    method: Optional[MethodOption] = typer.Option(None, help="stl (composite BO on the spec's parts), pi (the paper), logei, or random search (default: the task's)."),
+    method: Optional[MethodOption] = typer.Option(
+        None, help="stl (composite BO on the spec's parts), pi (the paper), logei, or random search (default: the task's)."
+    ),
 ) -> None:
     """Optimise a skill so that its execution satisfies the task's STL specification.
 
@@ -386,7 +385,9 @@ def report(
     run_dir: Path = typer.Argument(..., metavar="RUN_DIR", help="Run directory written by 'stlopt optimize'."),
     out: Optional[Path] = typer.Option(None, "--out", help="Folder for the figures and index.html (default: RUN_DIR/report)."),
     compare: list[Path] = typer.Option([], "--compare", help="Another run directory to compare best-so-far robustness with (repeatable)."),
-    gp_parameter: list[str] = typer.Option([], "--gp-parameter", help="Parameter for the GP slice figure, e.g. 'mean[3].x' (repeatable; default: the two most relevant)."),
+    gp_parameter: list[str] = typer.Option(
+        [], "--gp-parameter", help="Parameter for the GP slice figure, e.g. 'mean[3].x' (repeatable; default: the two most relevant)."
+    ),
 ) -> None:
     """Write the figures of an optimisation run (PNG) and an index.html that shows them.
 

@@ -7,7 +7,6 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
 import sys
 import warnings
 from dataclasses import dataclass, field
@@ -74,9 +73,7 @@ def read_signal_csv(path: str | Path, required: tuple[str, ...] = ()) -> SignalT
     steps = np.diff(times)
     if np.any(steps <= 0):
         row = int(np.argmax(steps <= 0)) + 1
-        raise SignalError(
-            f"{shown}:{row + 2}: time must be strictly increasing (t = {times[row]:g} after {times[row - 1]:g})"
-        )
+        raise SignalError(f"{shown}:{row + 2}: time must be strictly increasing (t = {times[row]:g} after {times[row - 1]:g})")
     columns = {name: data[:, index].copy() for index, name in enumerate(header) if name != TIME_COLUMN}
     return SignalTable(times.copy(), columns, shown)
 
@@ -141,9 +138,7 @@ def _parse_rows(rows: list[list[str]], header: list[str], shown: str) -> np.ndar
             try:
                 value = float(cell)
             except ValueError:
-                raise SignalError(
-                    f"{shown}:{line}: column '{header[column_index]}' has {cell.strip()!r}, not a number"
-                ) from None
+                raise SignalError(f"{shown}:{line}: column '{header[column_index]}' has {cell.strip()!r}, not a number") from None
             if not math.isfinite(value):
                 raise SignalError(f"{shown}:{line}: column '{header[column_index]}' is {cell.strip()}")
             data[row_index, column_index] = value

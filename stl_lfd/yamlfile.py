@@ -15,7 +15,6 @@ import yaml
 from stl_lfd.errors import ConfigError
 from stl_lfd.files import UnreadableFile, read_text
 
-
 MAX_BYTES = 1_000_000  # task, scene and behaviour files are a few hundred bytes
 MAX_NODES = 100_000  # values after expanding aliases (`*name`), against alias bombs
 

@@ -5,10 +5,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stl_lfd.skill.behaviour import ActionStep, behaviour_reference, load_behaviour
 from stl_lfd.errors import ConfigError
 from stl_lfd.optim import load_task
 from stl_lfd.sim import TIME_STEP
+from stl_lfd.skill.behaviour import ActionStep, behaviour_reference, load_behaviour
 from tests.conftest import ROOT
 
 BEHAVIOUR = ROOT / "configs" / "behaviours" / "pick_insert.yaml"
@@ -67,10 +67,7 @@ def test_bad_behaviour_files_name_the_file_and_the_step(tmp_path, text, message)
 
 def test_task_parameters_must_name_skills_of_the_behaviour(tmp_path):
     path = tmp_path / "task.yaml"
-    path.write_text(
-        f"spec: {ROOT / 'specs' / 'phi3.stl'}\nbehaviour: {BEHAVIOUR}\nduration: 48\n"
-        "parameters:\n  place:\n    durations: {components: all}\n"
-    )
+    path.write_text(f"spec: {ROOT / 'specs' / 'phi3.stl'}\nbehaviour: {BEHAVIOUR}\nduration: 48\nparameters:\n  place:\n    durations: {{components: all}}\n")
     with pytest.raises(ConfigError, match="unknown key 'parameters.place' \\(known: pick, insert\\)"):
         load_task(path)
 

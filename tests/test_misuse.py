@@ -24,7 +24,9 @@ from stl_lfd.cli import app
 from tests.conftest import ROOT
 
 runner = CliRunner()
-TASK = "spec: @spec@\nmodel: @model@\nbackend: kinematic\nduration: 22\nrate: 50\nparameters: {means: {components: [2, 3]}}\noptimizer: {initial: 2, trials: 3}\n"
+TASK = (
+    "spec: @spec@\nmodel: @model@\nbackend: kinematic\nduration: 22\nrate: 50\nparameters: {means: {components: [2, 3]}}\noptimizer: {initial: 2, trials: 3}\n"
+)
 PHI1 = str(ROOT / "specs" / "phi1.stl")
 
 
@@ -123,7 +125,13 @@ CASES = [
     csv_case("csv-header-only", "t,s\n", "has a header but no samples"),
     csv_case("csv-no-time", "s\n1\n2\n", "missing column 't'"),
     csv_case("csv-bom-no-time", "\ufeffs,u\n1,2\n", "missing column 't' (the header has: s, u)"),
-    Case("csv-missing-signal", ["robustness", "{case}/s.stl", "{case}/s.csv"], 3, "unknown signal 's' (the trace has: u)", {"s.stl": "phi := F s > 0\n", "s.csv": "t,u\n0,1\n1,2\n"}),
+    Case(
+        "csv-missing-signal",
+        ["robustness", "{case}/s.stl", "{case}/s.csv"],
+        3,
+        "unknown signal 's' (the trace has: u)",
+        {"s.stl": "phi := F s > 0\n", "s.csv": "t,u\n0,1\n1,2\n"},
+    ),
     csv_case("csv-text-cell", "t,s\n0,1\n1,abc\n", "s.csv:3: column 's' has 'abc'"),
     csv_case("csv-nan-cell", "t,s\n0,1\n1,nan\n", "s.csv:3: column 's' is nan"),
     csv_case("csv-inf-cell", "t,s\n0,inf\n1,1\n", "s.csv:2: column 's' is inf"),
@@ -139,7 +147,13 @@ CASES = [
     Case("learn-empty-folder", ["learn", "{case}", "-o", "{case}/m.npz"], 4, "no demonstration CSV files"),
     Case("learn-k-zero", ["learn", "{demos}", "-K", "0", "-o", "{case}/m.npz"], 6, "K must be from 1 to 200"),
     Case("learn-k-huge", ["learn", "{demos}", "-K", "100000", "-o", "{case}/m.npz"], 6, "K must be from 1 to 200"),
-    Case("learn-k-too-many-for-demos", ["learn", "{case}", "-K", "3", "-o", "{case}/m.npz"], 6, "use a smaller K", {"d.csv": "t,x,y,z\n0,1,1,1\n1,1,1,2\n2,1,1,3\n"}),
+    Case(
+        "learn-k-too-many-for-demos",
+        ["learn", "{case}", "-K", "3", "-o", "{case}/m.npz"],
+        6,
+        "use a smaller K",
+        {"d.csv": "t,x,y,z\n0,1,1,1\n1,1,1,2\n2,1,1,3\n"},
+    ),
     Case("learn-period-zero", ["learn", "{demos}", "--sample-period", "0", "-o", "{case}/m.npz"], 6, "the sample period must be a positive"),
     Case("learn-period-negative", ["learn", "{demos}", "--sample-period", "-1", "-o", "{case}/m.npz"], 6, "the sample period must be a positive"),
     Case("learn-period-nan", ["learn", "{demos}", "--sample-period", "nan", "-o", "{case}/m.npz"], 6, "the sample period must be a positive"),
@@ -153,7 +167,10 @@ CASES = [
     Case("learn-demo-no-x", ["learn", "{case}", "-o", "{case}/m.npz"], 4, "missing column 'x'", {"d.csv": "t,y,z\n0,1,1\n1,1,1\n"}),
     Case("learn-demo-one-sample", ["learn", "{case}", "-o", "{case}/m.npz"], 4, "needs at least 2 samples", {"d.csv": "t,x,y,z\n0,1,1,1\n"}),
     Case(
-        "learn-demos-differ", ["learn", "{case}", "-o", "{case}/m.npz"], 4, "differ from",
+        "learn-demos-differ",
+        ["learn", "{case}", "-o", "{case}/m.npz"],
+        4,
+        "differ from",
         {"a.csv": "t,x,y,z\n0,1,1,1\n1,1,1,1\n", "b.csv": "t,x,y,z,g\n0,1,1,1,0\n1,1,1,1,0\n"},
     ),
     # --- models and retrieval ---------------------------------------------------------------
@@ -177,8 +194,16 @@ CASES = [
     Case("rollout-unknown-scene", ["rollout", "{model}", "--scene", "kitchen"], 5, "unknown scene 'kitchen'"),
     Case("rollout-scene-missing-file", ["rollout", "{model}", "--scene", "{case}/s.yaml"], 5, "scene file not found"),
     Case("rollout-scene-bad-yaml", ["rollout", "{model}", "--scene", "{case}/s.yaml"], 5, "invalid YAML", {"s.yaml": "a: [1, 2\n"}),
-    Case("rollout-scene-unknown-key", ["rollout", "{model}", "--scene", "{case}/s.yaml"], 5, "unknown key 'colour'", {"s.yaml": "description: x\ncolour: red\n"}),
-    Case("rollout-scene-duplicate-key", ["rollout", "{model}", "--scene", "{case}/s.yaml"], 5, "duplicate key 'description'", {"s.yaml": "description: x\ndescription: y\n"}),
+    Case(
+        "rollout-scene-unknown-key", ["rollout", "{model}", "--scene", "{case}/s.yaml"], 5, "unknown key 'colour'", {"s.yaml": "description: x\ncolour: red\n"}
+    ),
+    Case(
+        "rollout-scene-duplicate-key",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml"],
+        5,
+        "duplicate key 'description'",
+        {"s.yaml": "description: x\ndescription: y\n"},
+    ),
     Case("rollout-backend-unknown", ["rollout", "{model}", "--backend", "mujoco"], 2, "mujoco"),
     Case("rollout-duration-huge", ["rollout", "{model}", "--backend", "kinematic", "--duration", "1e6"], 6, "above the limit"),
     Case("rollout-rate-zero", ["rollout", "{model}", "--rate", "0"], 6, "the rate must be a positive"),
@@ -191,8 +216,14 @@ CASES = [
     Case("task-not-mapping", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "expected a mapping", {"t.yaml": "- 1\n- 2\n"}),
     Case("task-duplicate-key", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "duplicate key 'duration'", {"t.yaml": task_text() + "duration: 5\n"}),
     Case(
-        "task-alias-bomb", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "aliases expand to more than",
-        {"t.yaml": "a: &a [1,1,1,1,1,1,1,1,1,1]\n" + "".join(f"{chr(98 + i)}: &{chr(98 + i)} [" + ",".join([f"*{chr(97 + i)}"] * 10) + "]\n" for i in range(6))},
+        "task-alias-bomb",
+        ["optimize", "{case}/t.yaml", "--out", "{case}/out"],
+        5,
+        "aliases expand to more than",
+        {
+            "t.yaml": "a: &a [1,1,1,1,1,1,1,1,1,1]\n"
+            + "".join(f"{chr(98 + i)}: &{chr(98 + i)} [" + ",".join([f"*{chr(97 + i)}"] * 10) + "]\n" for i in range(6))
+        },
     ),
     Case("task-huge-file", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "larger than 1000 kB", {"t.yaml": "# " + "x" * 1_100_000 + "\n"}),
     task_case("task-unknown-key", "unknown key 'iterations'", iterations="5"),
@@ -204,7 +235,7 @@ CASES = [
     task_case("task-rate-huge", "above the limit of 10000", rate="1e9"),
     task_case("task-rate-samples", "above the limit of 2,000,000", rate="1000", duration="1e4"),
     task_case("task-nu-negative", "'nu' must be positive", nu="-1"),
-    task_case("task-semantics", "'semantics' must be one of new, classic", semantics="fuzzy"),
+    task_case("task-semantics", "'semantics' must be one of classic, new", semantics="fuzzy"),
     task_case("task-backend", "'backend' must be one of pybullet, kinematic", backend="mujoco"),
     task_case("task-name-slash", "'name' must be a plain name", name="../elsewhere"),
     task_case("task-seed-huge", "'optimizer.seed' must be at most 4294967295", optimizer="{seed: 1e23}"),
@@ -222,7 +253,13 @@ CASES = [
     task_case("task-beta-negative", "'parameters.means.beta' must be positive", parameters="{means: {components: [2], beta: -1}}"),
     task_case("task-transitions", "'parameters.transitions' must be one of none, band, full", parameters="{transitions: diag}"),
     task_case("task-horizon", "looks 17 s ahead but rollouts last 5 s", duration="5"),
-    Case("task-spec-unknown-signal", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 3, "signal q is not recorded", {"t.yaml": task_text(spec="q.stl"), "q.stl": "phi := F q > 0\n"}),
+    Case(
+        "task-spec-unknown-signal",
+        ["optimize", "{case}/t.yaml", "--out", "{case}/out"],
+        3,
+        "signal q is not recorded",
+        {"t.yaml": task_text(spec="q.stl"), "q.stl": "phi := F q > 0\n"},
+    ),
     task_case("cli-seed-huge", "must be from 0 to 4294967295", extra=["--seed", "99999999999999"]),
     task_case("cli-init-above-iterations", "exceeds 'optimizer.trials'", extra=["--init", "9", "--iterations", "4"]),
     task_case("cli-iterations-zero", "must be at least 1", extra=["--iterations", "0"]),
@@ -234,17 +271,40 @@ CASES = [
     # --- resuming ---------------------------------------------------------------------------
     Case("resume-missing", ["optimize", "{task}", "--out", "{case}/nope", "--resume"], 9, "no such run directory"),
     Case("resume-not-a-run", ["optimize", "{task}", "--out", "{case}", "--resume"], 9, "not a run directory of stlopt optimize"),
-    Case("resume-other-seed", ["optimize", "{task}", "--out", "{run}", "--resume", "--seed", "5"], 9, "--seed cannot change on --resume (the run has 0, got 5)"),
-    Case("resume-other-method", ["optimize", "{task}", "--out", "{run}", "--resume", "--method", "pi"], 9, "--method cannot change on --resume (the run has stl, got pi)"),
+    Case(
+        "resume-other-seed", ["optimize", "{task}", "--out", "{run}", "--resume", "--seed", "5"], 9, "--seed cannot change on --resume (the run has 0, got 5)"
+    ),
+    Case(
+        "resume-other-method",
+        ["optimize", "{task}", "--out", "{run}", "--resume", "--method", "pi"],
+        9,
+        "--method cannot change on --resume (the run has stl, got pi)",
+    ),
     Case("resume-other-backend", ["optimize", "{task}", "--out", "{run}", "--resume", "--backend", "pybullet"], 9, "--backend cannot change on --resume"),
     Case("resume-other-init", ["optimize", "{task}", "--out", "{run}", "--resume", "--init", "1"], 9, "--init cannot change on --resume"),
-    Case("resume-other-spec", ["optimize", "{task}", "--out", "{run}", "--resume", "--spec", str(ROOT / "specs" / "phi2.stl")], 9, "--spec cannot change on --resume"),
     Case(
-        "resume-other-task", ["optimize", "{case}/t.yaml", "--out", "{run}", "--resume"], 9, "not the task of the run",
+        "resume-other-spec",
+        ["optimize", "{task}", "--out", "{run}", "--resume", "--spec", str(ROOT / "specs" / "phi2.stl")],
+        9,
+        "--spec cannot change on --resume",
+    ),
+    Case(
+        "resume-other-task",
+        ["optimize", "{case}/t.yaml", "--out", "{run}", "--resume"],
+        9,
+        "not the task of the run",
         {"t.yaml": task_text(parameters="{means: {components: [2, 3]}, transitions: band}")},
     ),
-    *[Case(f"damaged-resume-{name}", ["optimize", "{task}", "--out", "{case}/run", "--resume"], 9, message, damage=damage) for name, (damage, message) in DAMAGES.items() if name not in ("empty-trials",)],
-    *[Case(f"damaged-report-{name}", ["report", "{case}/run", "--out", "{case}/report"], 9, message, damage=damage) for name, (damage, message) in DAMAGES.items() if name not in ("empty-trials", "short-x", "inputs-garbage")],
+    *[
+        Case(f"damaged-resume-{name}", ["optimize", "{task}", "--out", "{case}/run", "--resume"], 9, message, damage=damage)
+        for name, (damage, message) in DAMAGES.items()
+        if name not in ("empty-trials",)
+    ],
+    *[
+        Case(f"damaged-report-{name}", ["report", "{case}/run", "--out", "{case}/report"], 9, message, damage=damage)
+        for name, (damage, message) in DAMAGES.items()
+        if name not in ("empty-trials", "short-x", "inputs-garbage")
+    ],
     Case("damaged-replay-empty-trials", ["replay", "{case}/run", "--video", "{case}/v.mp4"], 9, "no successful trial yet", damage=DAMAGES["empty-trials"][0]),
     # --- replay and report ------------------------------------------------------------------
     Case("replay-trial-negative", ["replay", "{run}", "--trial", "-1", "--video", "{case}/v.mp4"], 9, "no trial -1 (the run has trials 1 to 3"),
@@ -305,7 +365,9 @@ def test_bad_input(case: Case, workspace, tmp_path, monkeypatch):
     folder.mkdir()
     for name, content in case.files.items():
         path = folder / name
-        path.write_bytes(content) if isinstance(content, bytes) else path.write_text(content.replace("@spec@", PHI1).replace("@model@", str(workspace["model"])))
+        path.write_bytes(content) if isinstance(content, bytes) else path.write_text(
+            content.replace("@spec@", PHI1).replace("@model@", str(workspace["model"]))
+        )
     if case.damage is not None:
         shutil.copytree(workspace["run"], folder / "run")
         case.damage(folder / "run")

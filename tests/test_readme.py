@@ -136,7 +136,9 @@ def _run_up_to(index: int, folder: Path) -> subprocess.CompletedProcess:
     return _done[index]
 
 
-@pytest.mark.parametrize("index", [pytest.param(index, marks=[pytest.mark.slow] if _is_slow(example) else [], id=f"line{example.line}") for index, example in enumerate(EXAMPLES)])
+@pytest.mark.parametrize(
+    "index", [pytest.param(index, marks=[pytest.mark.slow] if _is_slow(example) else [], id=f"line{example.line}") for index, example in enumerate(EXAMPLES)]
+)
 def test_readme_console_example(index, scratch):
     example = EXAMPLES[index]
     result = _run_up_to(index, scratch)

@@ -11,9 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 
-def hmm_posteriors(
-    startprob: np.ndarray, transmat: np.ndarray, frame_likelihood: np.ndarray, lengths: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def hmm_posteriors(startprob: np.ndarray, transmat: np.ndarray, frame_likelihood: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Scaled forward-backward for a batch of sequences padded to a common length.
 
     Args:

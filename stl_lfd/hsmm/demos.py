@@ -25,9 +25,7 @@ def load_demos(folder: str | Path) -> list[SignalTable]:
         if demo.samples < 2:
             raise SignalError(f"{demo.source}: a demonstration needs at least 2 samples (found {demo.samples})")
         if list(demo.columns) != list(demos[0].columns):
-            raise SignalError(
-                f"{demo.source}: columns {', '.join(demo.columns)} differ from {demos[0].source} ({', '.join(demos[0].columns)})"
-            )
+            raise SignalError(f"{demo.source}: columns {', '.join(demo.columns)} differ from {demos[0].source} ({', '.join(demos[0].columns)})")
     return demos
 
 

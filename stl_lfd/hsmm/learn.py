@@ -40,8 +40,7 @@ def learn_from_folder(folder: str | Path, n_states: int = 6, sample_period: floa
     shortest = min(len(sequence) for sequence in sequences)
     if shortest < 2 * n_states:
         raise ModelError(
-            f"{folder}: K = {n_states} needs at least {2 * n_states} samples per demonstration "
-            f"(the shortest has {shortest} after resampling); use a smaller K"
+            f"{folder}: K = {n_states} needs at least {2 * n_states} samples per demonstration (the shortest has {shortest} after resampling); use a smaller K"
         )
     model = HSMM(n_states=n_states)
     model.fit(np.concatenate(sequences), np.array([len(s) for s in sequences]), period, list(demos[0].columns))

@@ -72,9 +72,7 @@ def solve(
     return states, controls
 
 
-def _backward(
-    A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray, targets: np.ndarray, ids: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def _backward(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray, targets: np.ndarray, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Feedback gains `(T-1) x m x n` and feedforward terms `(T-1) x m`."""
     steps = ids.size
     n, m = B.shape

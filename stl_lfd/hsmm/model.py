@@ -228,8 +228,7 @@ class HSMM:
         shortest = int(lengths.min())
         if shortest < self.n_states:
             raise ModelError(
-                f"K = {self.n_states} states need demonstrations of at least {self.n_states} samples "
-                f"(the shortest has {shortest}); use a smaller K"
+                f"K = {self.n_states} states need demonstrations of at least {self.n_states} samples (the shortest has {shortest}); use a smaller K"
             )
 
     def _init_kbins(self, sequences: list[np.ndarray]) -> None:

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from stl_lfd.errors import ModelError
-from stl_lfd.limits import samples_problem
 from stl_lfd.hsmm import lqt
 from stl_lfd.hsmm.model import HSMM
+from stl_lfd.limits import samples_problem
 
 # Control cost of the tracker relative to the state precisions; smaller tracks the means
 # more tightly, larger gives smoother, lazier motion.

@@ -1,32 +1,52 @@
 """Optimisation of skill parameters for STL specifications (the paper's Algorithm 1).
 
-- `task`: task files (YAML) and their validation;
+- `task`: task files (YAML), the optimiser's settings and their validation;
 - `space`: which parameters move, their bounds, and how a point becomes a model;
 - `acquisition`: Sobol and random points, GP fitting and acquisition maximisation (BoTorch);
+- `composite`: method `stl`, one GP output per part of the spec;
 - `loop`: the trial loop;
-- `rundir`: run directories;
-- `run`: a run from a task file, from preparation to summary.
+- `rundir`, `resume`: run directories, and what a resume checks;
+- `run`: a run from a task file, from preparation to summary;
+- `api`: `optimize` from Python objects, in memory.
+
+Names are loaded on first use, so that importing `stl_lfd.optim.task` (for the method names,
+say) does not load the whole optimiser.
 """
 
-from stl_lfd.optim.loop import Trial, best_trial
-from stl_lfd.optim.run import optimise, resume_run, start_run
-from stl_lfd.optim.rundir import RunDirectory, trial_skill
-from stl_lfd.optim.space import ParameterSpace, SearchSpace, build_search_space, build_space
-from stl_lfd.optim.task import SINGLE_SKILL, Task, load_task
+from __future__ import annotations
 
-__all__ = [
-    "SINGLE_SKILL",
-    "ParameterSpace",
-    "SearchSpace",
-    "RunDirectory",
-    "Task",
-    "Trial",
-    "best_trial",
-    "build_search_space",
-    "build_space",
-    "load_task",
-    "optimise",
-    "resume_run",
-    "start_run",
-    "trial_skill",
-]
+from importlib import import_module
+from typing import Any
+
+_HOMES = {
+    "Trial": "stl_lfd.optim.loop",
+    "best_trial": "stl_lfd.optim.loop",
+    "optimise": "stl_lfd.optim.run",
+    "resume_run": "stl_lfd.optim.run",
+    "start_run": "stl_lfd.optim.run",
+    "RunDirectory": "stl_lfd.optim.rundir",
+    "trial_skill": "stl_lfd.optim.rundir",
+    "ParameterSpace": "stl_lfd.optim.space",
+    "SearchSpace": "stl_lfd.optim.space",
+    "build_search_space": "stl_lfd.optim.space",
+    "build_space": "stl_lfd.optim.space",
+    "SINGLE_SKILL": "stl_lfd.optim.task",
+    "Task": "stl_lfd.optim.task",
+    "load_task": "stl_lfd.optim.task",
+    "optimize": "stl_lfd.optim.api",
+    "Result": "stl_lfd.optim.api",
+}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _HOMES:
+        raise AttributeError(f"module 'stl_lfd.optim' has no attribute {name!r}")
+    value = getattr(import_module(_HOMES[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(list(globals()) + __all__)

@@ -79,7 +79,6 @@ def single_threaded() -> Iterator[None]:
 
 
 def _maximise(X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, method: str, xi: float, seed: int) -> np.ndarray:
-    import torch
     from botorch.acquisition.analytic import LogExpectedImprovement, LogProbabilityOfImprovement
 
     model = fit_gp(X, Y, bounds)

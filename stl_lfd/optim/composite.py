@@ -69,9 +69,7 @@ def trust_region_length(Y: np.ndarray, initial: int, region: TrustRegion = Trust
     return length
 
 
-def propose_composite(
-    X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarray, semantics: Semantics, initial: int, seed: int
-) -> np.ndarray:
+def propose_composite(X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarray, semantics: Semantics, initial: int, seed: int) -> np.ndarray:
     """The next point of composite BO.
 
     Args:

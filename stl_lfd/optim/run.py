@@ -10,7 +10,6 @@ from typing import Any, Callable
 
 import numpy as np
 
-from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
 from stl_lfd.errors import ConfigError, RunError, SpecError
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
 from stl_lfd.optim.loop import Outcome, Trial, best_trial, run_trials
@@ -19,6 +18,7 @@ from stl_lfd.optim.rundir import RunDirectory, check_new_run_path
 from stl_lfd.optim.space import SearchSpace, build_search_space
 from stl_lfd.optim.task import SINGLE_SKILL, Task
 from stl_lfd.sim import RECORDED_SIGNALS, Scene, execute, load_scene
+from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
 from stl_lfd.stl import SpecParts, ast, compile_spec, load_spec, split_spec
 
 

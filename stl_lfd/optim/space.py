@@ -145,7 +145,6 @@ def _states(components: tuple[int, ...] | str, K: int, source: Path | str, key: 
     return [state - 1 for state in components]
 
 
-
 @dataclass(frozen=True)
 class SearchSpace:
     """The optimised parameters of all skills of a task: the skills' spaces side by side.

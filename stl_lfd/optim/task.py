@@ -12,14 +12,13 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Iterator
 
+from stl_lfd.choices import BACKENDS, METHODS, SEMANTICS
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_SEED, MAX_STATES, MAX_TRIALS, samples_problem
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
-METHODS = ("stl", "pi", "logei", "random")
 SINGLE_SKILL = "skill"  # the name of the one skill of a task without a behaviour
 TRANSITIONS = ("none", "band", "full")
-SEMANTICS = ("new", "classic")
 COORDINATES = ("x", "y", "z")
 
 
@@ -152,7 +151,7 @@ def load_task(path: str | Path) -> Task:
     base = path.parent
     behaviour = _existing(base, data["behaviour"], path, "behaviour") if "behaviour" in data else None
     semantics = _choice(data.get("semantics", "new"), SEMANTICS, path, "semantics")
-    backend = _choice(data.get("backend", "pybullet"), ("pybullet", "kinematic"), path, "backend")
+    backend = _choice(data.get("backend", "pybullet"), BACKENDS, path, "backend")
     task = Task(
         name=_name(data.get("name", path.stem), path),
         spec=_existing(base, data["spec"], path, "spec"),

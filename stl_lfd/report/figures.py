@@ -137,9 +137,9 @@ def gp_slices(run: RunData, parameters: list[str] | None = None) -> Figure | Non
     X, Y = run.observations()
     if len(Y) < 3 or run.best is None:
         return None
-    from stl_lfd.optim.acquisition import fit_gp
-
     import torch
+
+    from stl_lfd.optim.acquisition import fit_gp
 
     bounds = run.space.bounds
     model = fit_gp(X, Y, bounds)
@@ -203,8 +203,16 @@ def _transition_graph(axes, model: HSMM, title: str) -> None:
             bend = 0.35 if target > source else -0.35
             axes.add_patch(
                 FancyArrowPatch(
-                    positions[source], positions[target], connectionstyle=f"arc3,rad={-bend}", arrowstyle="-|>", mutation_scale=12,
-                    lw=0.5 + 5 * probability, color=BEST if highlighted else "0.55", shrinkA=14, shrinkB=14, alpha=0.9,
+                    positions[source],
+                    positions[target],
+                    connectionstyle=f"arc3,rad={-bend}",
+                    arrowstyle="-|>",
+                    mutation_scale=12,
+                    lw=0.5 + 5 * probability,
+                    color=BEST if highlighted else "0.55",
+                    shrinkA=14,
+                    shrinkB=14,
+                    alpha=0.9,
                 )
             )
     for state, (x, y) in positions.items():

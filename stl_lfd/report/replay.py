@@ -11,13 +11,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from stl_lfd.skill.behaviour import load_behaviour, reference_for
 from stl_lfd.errors import ConfigError, ExecutionError
-from stl_lfd.stl.evaluate import evaluate_table
 from stl_lfd.files import atomic_output, check_output_file
-from stl_lfd.skill.execution import scene_with_spec_regions
 from stl_lfd.hsmm import HSMM, load_model
 from stl_lfd.sim import DEFAULT_RATE, execute
+from stl_lfd.skill.behaviour import load_behaviour, reference_for
+from stl_lfd.skill.execution import scene_with_spec_regions
+from stl_lfd.stl.evaluate import evaluate_table
 
 ProgressFactory = Callable[[str, int], AbstractContextManager[Callable[[int], None]]]
 

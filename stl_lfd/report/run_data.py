@@ -9,6 +9,7 @@ import numpy as np
 
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim import RunDirectory, SearchSpace, Task, Trial, build_search_space
+from stl_lfd.optim.loop import observations
 from stl_lfd.signals import SignalTable, read_signal_csv
 from stl_lfd.stl import ast, load_spec
 from stl_lfd.stl.regions import region_boxes
@@ -54,9 +55,10 @@ class RunData:
         return self.space.apply(self.models, best.x) if best is not None else self.models
 
     def observations(self) -> tuple[np.ndarray, np.ndarray]:
-        """`n x d` points and `n` robustness values of the successful trials."""
-        succeeded = [trial for trial in self.trials if trial.robustness is not None]
-        return np.array([trial.x for trial in succeeded]).reshape(-1, self.space.dimension), np.array([trial.robustness for trial in succeeded])
+        """`n x d` points and `n` values: what the optimiser's GP saw (failed trials at the worst
+        robustness observed), so that the report's surrogate is the optimiser's."""
+        X, Y = observations(self.trials)
+        return X.reshape(-1, self.space.dimension), Y
 
 
 def load_run(path: Path) -> RunData:

@@ -14,12 +14,11 @@ from __future__ import annotations
 
 from typing import Callable, Protocol
 
+from stl_lfd.choices import BACKENDS
 from stl_lfd.errors import ExecutionError
 from stl_lfd.sim.kinematic import KinematicBackend
 from stl_lfd.sim.reference import RECORDED_SIGNALS, SIMULATION_RATE, TIME_STEP, Reference, Rollout, TrackingWarning, warn_if_untracked
 from stl_lfd.sim.scene import Scene, builtin_scenes, load_scene
-
-BACKENDS = ("pybullet", "kinematic")
 
 
 class Backend(Protocol):

@@ -13,8 +13,6 @@ from stl_lfd.signals import SignalTable
 # The rate at which references are given and the simulator steps: PyBullet's default 240 Hz.
 SIMULATION_RATE = 240.0
 TIME_STEP = 1.0 / SIMULATION_RATE
-# Signals every rollout records (a backend without a force sensor records 0).
-RECORDED_SIGNALS = ("x", "y", "z", "gripper", "force")
 
 ACTIONS = ("grasp", "release")
 

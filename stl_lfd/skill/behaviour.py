@@ -98,10 +98,7 @@ def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:
 
 def behaviour_models(behaviour: Behaviour) -> dict[str, HSMM]:
     """The model of every skill, learned from its demonstrations or loaded."""
-    return {
-        step.name: learn_from_folder(step.demos, step.states)[0] if step.demos is not None else load_model(step.model)
-        for step in behaviour.skills
-    }
+    return {step.name: learn_from_folder(step.demos, step.states)[0] if step.demos is not None else load_model(step.model) for step in behaviour.skills}
 
 
 def behaviour_reference(behaviour: Behaviour, models: dict[str, HSMM], open_width: float, duration: float | None = None) -> Reference:

@@ -39,11 +39,7 @@ def new_conjunction(values: np.ndarray, nu: float) -> np.ndarray:
         relative = (safe_values - safe_minimum) / safe_minimum  # ... x m
         # Negative branch: relative <= 0 for every finite operand, +inf operands drop out.
         negative_weights = np.where(finite, np.exp(nu * relative), 0.0)
-        negative = (
-            safe_minimum[..., 0]
-            * np.sum(negative_weights * np.exp(relative), axis=-1)
-            / np.sum(negative_weights, axis=-1)
-        )
+        negative = safe_minimum[..., 0] * np.sum(negative_weights * np.exp(relative), axis=-1) / np.sum(negative_weights, axis=-1)
         # Positive branch: relative >= 0.
         positive_weights = np.where(finite, np.exp(-nu * relative), 0.0)
         positive = np.sum(safe_values * positive_weights, axis=-1) / np.sum(positive_weights, axis=-1)
@@ -116,9 +112,7 @@ def window_reduce(values: np.ndarray, width: int, count: int, reduce, nu: float)
     return np.concatenate(parts, axis=-1)
 
 
-def until_windows(
-    left: np.ndarray, right: np.ndarray, lo: int, width: int, count: int, conjunction, nu: float
-) -> np.ndarray:
+def until_windows(left: np.ndarray, right: np.ndarray, lo: int, width: int, count: int, conjunction, nu: float) -> np.ndarray:
     """`left U[lo, width-1] right` at each of `count` outputs.
 
     For output i: the disjunction over j in [lo, width-1] of the conjunction of right[i + j]

@@ -215,7 +215,6 @@ class Until(Formula):
         return (self.left, self.right)
 
 
-
 @dataclass(frozen=True)
 class Definition:
     name: str

@@ -51,9 +51,7 @@ class SpecParts:
         return float(composed) if values.ndim == 1 else composed
 
 
-def split_spec(
-    spec: ast.Spec | ast.Formula, semantics: SemanticsName | Semantics = "classic", nu: float = 1.0, source: str = "<string>"
-) -> SpecParts:
+def split_spec(spec: ast.Spec | ast.Formula, semantics: SemanticsName | Semantics = "classic", nu: float = 1.0, source: str = "<string>") -> SpecParts:
     """The parts of `spec`: the operands of its top-level `&` (following defined names to it),
     or the whole formula when the top is not a conjunction."""
     if not isinstance(semantics, Semantics):

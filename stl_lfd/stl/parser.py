@@ -136,9 +136,7 @@ def _parse_checked(text: str, source: str, base_dir: Path, including: tuple[Path
     return spec
 
 
-def _include(
-    include_path: str, line: int, text: str, source: str, base_dir: Path, including: tuple[Path, ...]
-) -> tuple[ast.Definition, ...]:
+def _include(include_path: str, line: int, text: str, source: str, base_dir: Path, including: tuple[Path, ...]) -> tuple[ast.Definition, ...]:
     path = (base_dir / include_path).resolve()
     if path in including:
         raise StlNameError(f"circular include of '{include_path}'", source, line, 1).located(source, text)
@@ -236,9 +234,7 @@ def _check_recursion(definitions: dict[str, ast.Definition]) -> None:
         if name in path:
             cycle = path[path.index(name) :] + (name,)
             definition = definitions[cycle[0]]
-            raise StlNameError(
-                f"recursive definition: {' -> '.join(cycle)}", definition.source, definition.line, 1
-            )
+            raise StlNameError(f"recursive definition: {' -> '.join(cycle)}", definition.source, definition.line, 1)
         if name in finished:
             return
         for node in definitions[name].formula.walk():
@@ -329,9 +325,7 @@ class _ToAst(Transformer):
             if value < 0:
                 raise StlSyntaxError(f"interval bounds must be non-negative (got {value:g})", self.source, line, column)
         if lo[0] > hi[0]:
-            raise StlSyntaxError(
-                f"empty interval [{lo[0]:g}, {hi[0]:g}]: the lower bound is above the upper", self.source, lo[1], lo[2]
-            )
+            raise StlSyntaxError(f"empty interval [{lo[0]:g}, {hi[0]:g}]: the lower bound is above the upper", self.source, lo[1], lo[2])
         return ast.Interval(lo[0], hi[0])
 
     def bound(self, meta, *tokens: Token):
@@ -361,6 +355,4 @@ class _ToAst(Transformer):
             return ast.Signal(node.name, node.line, node.column, node.source)
         if isinstance(node, ast.Expr):
             return node
-        raise StlSyntaxError(
-            "expected an arithmetic expression but found a formula", self.source, meta.line, meta.column
-        )
+        raise StlSyntaxError("expected an arithmetic expression but found a formula", self.source, meta.line, meta.column)

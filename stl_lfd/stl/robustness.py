@@ -22,6 +22,7 @@ from typing import Callable, Literal, Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
+from stl_lfd.choices import SEMANTICS
 from stl_lfd.errors import SignalError, SpecError, StlNameError
 from stl_lfd.stl import ast
 from stl_lfd.stl._numerics import (
@@ -35,7 +36,6 @@ from stl_lfd.stl.parser import parse, resolve
 from stl_lfd.stl.printer import format_formula
 
 SemanticsName = Literal["classic", "new"]
-SEMANTICS: tuple[str, ...] = ("classic", "new")
 # Sample times within this of a window's end belong to the window.
 TIME_TOLERANCE = 1e-9
 # Sampling counts as uniform when every step is within this fraction of the mean step.
@@ -140,9 +140,7 @@ class Robustness:
         if missing:
             node = next(n for n in self.formula.walk() if isinstance(n, ast.Signal) and n.name == missing[0])
             available = ", ".join(sorted(signals)) or "none"
-            raise StlNameError(
-                f"unknown signal '{node.name}' (the trace has: {available})", node.source, node.line, node.column
-            )
+            raise StlNameError(f"unknown signal '{node.name}' (the trace has: {available})", node.source, node.line, node.column)
         _check_times(times)
         shapes = {array.shape for array in arrays.values()}
         if len(shapes) > 1 or any(array.ndim not in (1, 2) or array.shape[-1] != times.size for array in arrays.values()):
@@ -153,10 +151,7 @@ class Robustness:
         duration = float(times[-1] - times[0])
         if self.horizon > duration + TIME_TOLERANCE:
             warnings.warn(
-                HorizonWarning(
-                    f"{self.source}: the formula looks {self.horizon:g} s ahead but the trace lasts "
-                    f"{duration:g} s; windows are clipped at its end"
-                ),
+                HorizonWarning(f"{self.source}: the formula looks {self.horizon:g} s ahead but the trace lasts {duration:g} s; windows are clipped at its end"),
                 stacklevel=3,
             )
         self._warn_of_cost(times, batch)
@@ -184,9 +179,7 @@ class Robustness:
             )
 
 
-def compile_spec(
-    spec: str | ast.Spec | ast.Formula, semantics: SemanticsName | Semantics = "classic", nu: float = 1.0, source: str = "<string>"
-) -> Robustness:
+def compile_spec(spec: str | ast.Spec | ast.Formula, semantics: SemanticsName | Semantics = "classic", nu: float = 1.0, source: str = "<string>") -> Robustness:
     """Compile a specification (STL text, a parsed spec or a formula) into its robustness
     function."""
     if isinstance(spec, str):
@@ -218,9 +211,7 @@ def _check_times(times: np.ndarray) -> None:
         raise SignalError(f"sample times must be strictly increasing (sample {index}: t = {times[index]:g} s)")
     step = float(times[-1] - times[0]) / (times.size - 1)
     if np.max(np.abs(steps - step)) > UNIFORM_STEP_TOLERANCE * step:
-        raise SignalError(
-            f"sample times are not uniform (steps from {steps.min():g} to {steps.max():g} s); resample the signal"
-        )
+        raise SignalError(f"sample times are not uniform (steps from {steps.min():g} to {steps.max():g} s); resample the signal")
 
 
 def _window(interval: ast.Interval | None, trace: _Trace, start: int) -> tuple[int, int]:
@@ -325,8 +316,7 @@ def _finite_predicate(node: ast.Formula, evaluate: Evaluator) -> Evaluator:
             sample = start + int(np.argwhere(~np.isfinite(values))[0][1])
             kind = "NaN" if np.isnan(values).any() else "infinite"
             raise SpecError(
-                f"the predicate `{format_formula(node)}` is {kind} at t = {trace.elapsed[sample]:g} s "
-                "(a division by zero or an overflow in its arithmetic)"
+                f"the predicate `{format_formula(node)}` is {kind} at t = {trace.elapsed[sample]:g} s (a division by zero or an overflow in its arithmetic)"
             )
         return values
 

@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from stl_lfd.errors import ModelError
-from stl_lfd.hsmm import HSMM, load_model, retrieve, save_model
-from stl_lfd.hsmm import lqt
+from stl_lfd.hsmm import HSMM, load_model, lqt, retrieve, save_model
 from stl_lfd.hsmm._forward import duration_pmf, state_occupancy
 
 PERIOD = 0.01

@@ -22,7 +22,22 @@ STLOPT = str(Path(sys.executable).parent / "stlopt")
 
 def test_the_same_command_plus_resume_works_for_every_option(tmp_path, learned_model_file):
     task = small_task(tmp_path, learned_model_file)
-    options = ["--spec", str(ROOT / "specs" / "phi1.stl"), "-N", "3", "-M", "2", "--seed", "4", "--backend", "kinematic", "--method", "pi", "--out", str(tmp_path / "run")]
+    options = [
+        "--spec",
+        str(ROOT / "specs" / "phi1.stl"),
+        "-N",
+        "3",
+        "-M",
+        "2",
+        "--seed",
+        "4",
+        "--backend",
+        "kinematic",
+        "--method",
+        "pi",
+        "--out",
+        str(tmp_path / "run"),
+    ]
     first = runner.invoke(app, ["optimize", str(task)] + options)
     assert first.exit_code == 0, first.stderr
     again = runner.invoke(app, ["optimize", str(task)] + options + ["--resume"])

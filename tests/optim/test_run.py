@@ -30,7 +30,16 @@ def test_a_run_writes_its_directory_as_it_goes(tmp_path, learned_model_file):
     task = load_task(small_task(tmp_path, learned_model_file))
     summary = optimise(start_run(task, tmp_path / "run"))
     run = tmp_path / "run"
-    assert {path.name for path in run.iterdir()} == {"task.yaml", "inputs.json", ".lock", "model.npz", "trials.jsonl", "signals", "best_model.npz", "summary.json"}
+    assert {path.name for path in run.iterdir()} == {
+        "task.yaml",
+        "inputs.json",
+        ".lock",
+        "model.npz",
+        "trials.jsonl",
+        "signals",
+        "best_model.npz",
+        "summary.json",
+    }
     lines = (run / "trials.jsonl").read_text().splitlines()
     assert len(lines) == 5
     first = json.loads(lines[0])

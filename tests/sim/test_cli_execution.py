@@ -8,7 +8,6 @@ from typer.testing import CliRunner
 from stl_lfd.cli import app
 from stl_lfd.hsmm import save_model
 from stl_lfd.signals import read_signal_csv
-
 from tests.conftest import ROOT
 
 runner = CliRunner()

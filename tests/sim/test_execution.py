@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from stl_lfd.errors import ExecutionError
-from stl_lfd.skill.execution import reference_of, rollout_model
 from stl_lfd.sim import Reference, TrackingWarning, execute, load_scene
+from stl_lfd.skill.execution import reference_of, rollout_model
 
 SCENE = load_scene("free_space")
 

@@ -28,7 +28,17 @@ def pick_and_place(offset=(0.0, 0.0), grasp_at=GRASP):
     straight down, release at 11 s, move up."""
     target = HOLE + np.array([*offset, 0.0])
     above_grasp, above_hole = grasp_at + [0, 0, 0.14], target + [0, 0, 0.19]
-    waypoints = [(0, above_grasp), (2, grasp_at), (3.5, grasp_at), (5, above_grasp), (8, above_hole), (9, above_hole), (10.5, target), (11.5, target), (13, above_hole)]
+    waypoints = [
+        (0, above_grasp),
+        (2, grasp_at),
+        (3.5, grasp_at),
+        (5, above_grasp),
+        (8, above_hole),
+        (9, above_hole),
+        (10.5, target),
+        (11.5, target),
+        (13, above_hole),
+    ]
     times = np.arange(0, 13.5, 1 / 240)
     gripper = np.where((times >= 3.0) & (times < 11.0), 0.0, 0.08)
     return Reference(times, minimum_jerk(times, waypoints), gripper, ((3.0, "grasp"), (11.0, "release")))
@@ -92,7 +102,6 @@ def test_a_misaligned_insertion_pushes_hard_on_the_holder():
 def test_a_grasp_with_nothing_in_reach_fails_the_rollout():
     with pytest.raises(ExecutionError, match=r"grasp at t = 3.00 s: nothing within 30 mm of the hand"):
         execute(pick_and_place(grasp_at=GRASP + [0.0, 0.1, 0.0]), SCENE, "pybullet")
-
 
 
 @pytest.mark.parametrize(

@@ -14,9 +14,7 @@ def test_free_space_is_built_in():
 
 
 def test_regions_need_all_three_coordinates():
-    scene = load_scene("free_space").with_regions(
-        {"L1": {"x": (0.3, 0.4), "y": (0.0, 0.1), "z": (0.3, 0.4)}, "slab": {"x": (0.0, 1.0)}}
-    )
+    scene = load_scene("free_space").with_regions({"L1": {"x": (0.3, 0.4), "y": (0.0, 0.1), "z": (0.3, 0.4)}, "slab": {"x": (0.0, 1.0)}})
     assert [region.name for region in scene.regions] == ["L1"]
     assert scene.regions[0].lower == (0.3, 0.0, 0.3)
 

@@ -93,9 +93,7 @@ def _robustness(node, signals, times, k, conjunction) -> float:
         case ast.Eventually(child=child, interval=interval):
             return disjunction([rob(child, j) for j in window(times, k, interval)])
         case ast.Until(left=left, right=right, interval=interval):
-            return disjunction(
-                [conjunction([rob(right, j)] + [rob(left, i) for i in range(k, j)]) for j in window(times, k, interval)]
-            )
+            return disjunction([conjunction([rob(right, j)] + [rob(left, i) for i in range(k, j)]) for j in window(times, k, interval)])
     raise TypeError(node)
 
 

@@ -71,18 +71,14 @@ def test_arithmetic_precedence():
 def test_region_sugar_comments_and_definitions():
     spec = parse("# regions\nL1 := x in [-0.35, -0.25] & y in [0.15, 0.25]  # a box\nphi := F L1\n")
     assert spec.name == "phi"
-    assert spec.definition("L1") == ast.And(
-        (ast.InRange(ast.Signal("x"), -0.35, -0.25), ast.InRange(ast.Signal("y"), 0.15, 0.25))
-    )
+    assert spec.definition("L1") == ast.And((ast.InRange(ast.Signal("x"), -0.35, -0.25), ast.InRange(ast.Signal("y"), 0.15, 0.25)))
     assert resolve(spec) == ast.Eventually(spec.definition("L1"))
 
 
 def test_bare_formula_on_the_last_line():
     spec = parse("A := x > 0\nF A & G x < 2\n")
     assert spec.name is None
-    assert resolve(spec) == ast.And(
-        (ast.Eventually(formula("x > 0")), ast.Always(formula("x < 2")))
-    )
+    assert resolve(spec) == ast.And((ast.Eventually(formula("x > 0")), ast.Always(formula("x < 2"))))
 
 
 def test_include_brings_definitions(tmp_path: Path):
