@@ -52,7 +52,7 @@ def one_run(arguments: tuple[str, int]) -> dict:
         summary = optimise(start_run(task, Path(folder) / "run"))
         run = RunDirectory(Path(folder) / "run")
         before = insertion_and_pick(run.signals_path(0))
-        best = summary["best_trial"]
+        best = summary.best_trial
         after = insertion_and_pick(run.signals_path(best)) if best else (None, None)
         visited = len(followed_states(run.best_models()["pick"])) if best else None
     return summary | {"spec": spec, "before": before, "after": after, "visited": visited}

@@ -117,7 +117,7 @@ def _run_tool(task) -> tuple[list[dict], float]:
         prepared = start_run(task, Path(folder) / "run")
         optimise(prepared)
         trials = [json.loads(line) for line in (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()]
-        return trials, prepared.summary["initial_robustness"]
+        return trials, prepared.summary.initial_robustness
 
 
 def _run_tpe(task, seed: int) -> tuple[list[dict], float]:

@@ -65,15 +65,16 @@ INTERRUPTED = 130  # what a shell reports for a process that SIGINT ended
 def user_errors(on_interrupt: str = "interrupted") -> Iterator[None]:
     """Turn library errors into one stderr line and the error class's exit code, and Ctrl-C
     into the line `on_interrupt` and an interrupted exit (see `main`)."""
-    warnings.showwarning = _print_warning
-    try:
-        yield
-    except StlLfdError as error:
-        print(f"error: {error}", file=sys.stderr)
-        raise typer.Exit(code=error.exit_code) from None
-    except KeyboardInterrupt:
-        print(on_interrupt, file=sys.stderr)
-        raise typer.Exit(code=INTERRUPTED) from None
+    with warnings.catch_warnings():  # restores the process's warning display afterwards
+        warnings.showwarning = _print_warning
+        try:
+            yield
+        except StlLfdError as error:
+            print(f"error: {error}", file=sys.stderr)
+            raise typer.Exit(code=error.exit_code) from None
+        except KeyboardInterrupt:
+            print(on_interrupt, file=sys.stderr)
+            raise typer.Exit(code=INTERRUPTED) from None
 
 
 def main() -> None:
@@ -377,7 +378,7 @@ def optimize(
         printer = TrialPrinter(prepared)
         summary = optimise(prepared, printer.trial)
         printer.done(summary)
-    print(json.dumps(summary, indent=2))
+    print(json.dumps(summary.to_json(), indent=2))
 
 
 @app.command(cls=_PlainUsage)

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from rich.console import Console
 
 from stl_lfd.optim.loop import Trial
 from stl_lfd.optim.run import PreparedRun
+from stl_lfd.optim.summary import Summary
 
 
 class TrialPrinter:
@@ -19,7 +18,7 @@ class TrialPrinter:
         optimizer = task.optimizer
         done = len(prepared.history)
         self.budget = optimizer.trials
-        initial = summary["initial_robustness"]
+        initial = summary.initial_robustness
         self.console.print(
             f"[bold]{task.name}[/]: {task.spec.name}, {task.semantics} robustness, {prepared.space.dimension} parameters, "
             f"{task.backend} backend -> {prepared.run.path}"
@@ -41,14 +40,14 @@ class TrialPrinter:
             line += f"  [red]{trial.error}[/]"
         self.console.print(line)
 
-    def done(self, summary: dict[str, Any]) -> None:
-        best = summary["best_robustness"]
+    def done(self, summary: Summary) -> None:
+        best = summary.best_robustness
         if best is None:
             self.console.print("[red]every trial failed[/]")
             return
         self.console.print(
-            f"best: trial {summary['best_trial']}, robustness {best:+.5f} ({_verdict(summary['satisfied'])}; "
-            f"unoptimised {summary['initial_robustness']:+.5f}); {summary['trials']} trials in {summary['wall_seconds']:.1f} s"
+            f"best: trial {summary.best_trial}, robustness {best:+.5f} ({_verdict(summary.satisfied)}; "
+            f"unoptimised {summary.initial_robustness:+.5f}); {summary.trials} trials in {summary.wall_seconds:.1f} s"
         )
 
 

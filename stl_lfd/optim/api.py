@@ -16,13 +16,14 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Callable
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM
 from stl_lfd.limits import samples_problem
 from stl_lfd.optim.loop import Trial, best_trial
-from stl_lfd.optim.run import PreparedRun, objective_for, optimise, summary_of
+from stl_lfd.optim.run import PreparedRun, objective_for, optimise
+from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import SINGLE_SKILL, Optimizer, Parameters, Task
 from stl_lfd.signals import SignalTable
 from stl_lfd.stl import Spec
@@ -39,7 +40,7 @@ class Result:
         best_trial: the best `Trial`, or None.
         initial_robustness: robustness of the unoptimised skill.
         history: every trial in order.
-        summary: the fields of a run's `summary.json`.
+        summary: the run's `Summary` (what `summary.json` holds).
         signals: trial number -> recorded signals (0 is the unoptimised skill).
     """
 
@@ -48,7 +49,7 @@ class Result:
     best_trial: Trial | None
     initial_robustness: float
     history: list[Trial]
-    summary: dict[str, Any]
+    summary: Summary
     signals: dict[int, SignalTable] = field(default_factory=dict, repr=False)
 
     @property
@@ -70,7 +71,7 @@ class MemoryRun:
         self.signals: dict[int, SignalTable] = {0: initial_signals}
         self.trials: list[Trial] = []
         self.best_models: dict[str, HSMM] | None = None
-        self.summary: dict[str, Any] = {}
+        self.summary: Summary | None = None
         self.path = Path("<memory>")
 
     def append_trial(self, trial: Trial, signals: SignalTable | None) -> None:
@@ -84,7 +85,7 @@ class MemoryRun:
     def has_best_models(self) -> bool:
         return self.best_models is not None
 
-    def write_summary(self, summary: dict[str, Any]) -> None:
+    def write_summary(self, summary: Summary) -> None:
         self.summary = summary
 
     def close(self) -> None:
@@ -133,9 +134,14 @@ def optimize(
     )  # fmt: skip
     space, objective = objective_for(task, models, spec.tree)
     start = time.perf_counter()
-    initial = objective.evaluate(models)
-    summary = summary_of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
+    try:
+        initial = objective.evaluate(models)
+    except BaseException:
+        objective.close()
+        raise
+    summary = Summary.of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
     record = MemoryRun(initial.payload)
-    summary = optimise(PreparedRun(task, record, models, space, objective, [], summary), on_trial)
+    with PreparedRun(task, record, models, space, objective, [], summary) as prepared:
+        summary = optimise(prepared, on_trial)
     best = best_trial(record.trials)
-    return Result(record.best_models or models, summary["best_robustness"], best, summary["initial_robustness"], record.trials, summary, record.signals)
+    return Result(record.best_models or models, summary.best_robustness, best, summary.initial_robustness, record.trials, summary, record.signals)

@@ -16,25 +16,31 @@ from stl_lfd.optim.loop import Outcome, Trial, best_trial, run_trials
 from stl_lfd.optim.resume import check_resume, inputs_record
 from stl_lfd.optim.rundir import RunDirectory, check_new_run_path
 from stl_lfd.optim.space import SearchSpace, build_search_space
+from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import SINGLE_SKILL, Task
-from stl_lfd.sim import RECORDED_SIGNALS, Scene, execute, load_scene
+from stl_lfd.sim import RECORDED_SIGNALS, Scene, execute, load_scene, new_backend
 from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
 from stl_lfd.stl import SpecParts, ast, compile_spec, load_spec, split_spec
 
 
 class SkillObjective:
     """x -> adapted models -> (behaviour) reference -> rollout -> robustness of the recorded
-    signals and of the spec's top-level parts (payload: the signals)."""
+    signals and of the spec's top-level parts (payload: the signals). It owns its backend (one
+    simulated world for all its rollouts) until `close`."""
 
     def __init__(self, models: dict[str, HSMM], space: SearchSpace, task: Task, behaviour: Behaviour | None, scene: Scene, parts: SpecParts) -> None:
         self.models, self.space, self.task, self.behaviour, self.scene, self.parts = models, space, task, behaviour, scene, parts
+        self.backend = new_backend(task.backend)
+
+    def close(self) -> None:
+        self.backend.close()
 
     def __call__(self, x: np.ndarray) -> Outcome:
         return self.evaluate(self.space.apply(self.models, x))
 
     def evaluate(self, models: dict[str, HSMM]) -> Outcome:
         reference = reference_for(models, self.behaviour, self.scene.gripper_opening, self.task.duration)
-        signals = execute(reference, self.scene, self.task.backend, self.task.rate).signals
+        signals = execute(reference, self.scene, self.backend, self.task.rate).signals
         # The spec is evaluated once, part by part; composing the parts is exactly its robustness.
         values = self.parts(signals.columns, signals.times)
         return Outcome(self.parts.compose(values), signals, dict(zip(self.parts.names, values.tolist())))
@@ -48,11 +54,12 @@ class PreparedRun:
     space: SearchSpace
     objective: SkillObjective
     history: list[Trial]
-    summary: dict[str, Any]
+    summary: Summary
 
     def close(self) -> None:
-        """Release the run directory's write lock (ending the process releases it too)."""
+        """Release the run directory's write lock and the simulator (ending the process does too)."""
         self.run.close()
+        self.objective.close()
 
     def __enter__(self) -> "PreparedRun":
         return self
@@ -100,11 +107,15 @@ def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lam
         learn_progress(f"learning the skills of {task.source.name}")
     models = task_models(task)
     space, objective = objective_for(task, models)
-    start = time.perf_counter()
-    initial = objective.evaluate(models)
-    summary = summary_of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
-    inputs = inputs if inputs is not None else inputs_record(task, {}, task)
-    run = RunDirectory.create(out, task, models, initial.payload, summary, inputs)
+    try:
+        start = time.perf_counter()
+        initial = objective.evaluate(models)
+        summary = Summary.of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
+        inputs = inputs if inputs is not None else inputs_record(task, {}, task)
+        run = RunDirectory.create(out, task, models, initial.payload, summary, inputs)
+    except BaseException:
+        objective.close()
+        raise
     return PreparedRun(task, run, models, space, objective, [], summary)
 
 
@@ -135,12 +146,12 @@ def _reopen(run: RunDirectory, out: Path, trials: int | None, file_task: Task | 
     return PreparedRun(task, run, models, space, objective, history, summary)
 
 
-def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None) -> dict[str, Any]:
+def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None) -> Summary:
     """Run the remaining trials, recording each; returns the final summary."""
     run, space, task = prepared.run, prepared.space, prepared.task
-    previous_seconds = float(prepared.summary.get("wall_seconds", 0.0))
-    initial_robustness = prepared.summary["initial_robustness"]
-    initial_components = prepared.summary.get("initial_components")
+    previous_seconds = prepared.summary.wall_seconds
+    initial_robustness = prepared.summary.initial_robustness
+    initial_components = prepared.summary.initial_components
     start = time.perf_counter()
     best = best_trial(prepared.history)
 
@@ -153,43 +164,13 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
             best = trial
             run.write_best_models(space.apply(prepared.models, trial.x))
         history.append(trial)
-        run.write_summary(summary_of(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components))
+        run.write_summary(Summary.of(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components))
         on_trial(trial, best)
 
     history = list(prepared.history)
     if best is not None and not run.has_best_models():
         run.write_best_models(space.apply(prepared.models, best.x))
     run_trials(prepared.objective, space.bounds, task.optimizer, prepared.history, record, prepared.objective.parts)
-    summary = summary_of(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components)
+    summary = Summary.of(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components)
     run.write_summary(summary)
     return summary
-
-
-def summary_of(
-    task: Task, space: SearchSpace, initial_robustness: float, history: list[Trial], wall_seconds: float, initial_components: dict[str, float] | None = None
-) -> dict[str, Any]:
-    best = best_trial(history)
-    satisfied = [trial.trial for trial in history if trial.satisfied]
-    return {
-        "name": task.name,
-        "spec": str(task.spec),
-        "semantics": task.semantics,
-        "nu": task.nu if task.semantics == "new" else None,
-        "backend": task.backend,
-        "method": task.optimizer.method,
-        "seed": task.optimizer.seed,
-        "initial_trials": task.optimizer.initial,
-        "budget": task.optimizer.trials,
-        "initial_robustness": initial_robustness,
-        "initial_components": initial_components,
-        "best_robustness": best.robustness if best else None,
-        "best_trial": best.trial if best else None,
-        "satisfied": bool(best and best.satisfied),
-        "first_satisfied_trial": satisfied[0] if satisfied else None,
-        "trials": len(history),
-        "failed_trials": sum(trial.status == "failed" for trial in history),
-        "complete": len(history) >= task.optimizer.trials,
-        "wall_seconds": round(wall_seconds, 3),
-        "parameters": list(space.names),
-        "best_parameters": space.as_dict(best.x) if best else None,
-    }

@@ -40,6 +40,7 @@ from stl_lfd.files import check_output_folder, folder_mode, write_atomically
 from stl_lfd.hsmm import HSMM, load_model, save_model
 from stl_lfd.optim.loop import Trial, best_trial
 from stl_lfd.optim.space import build_search_space
+from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import SINGLE_SKILL, Task, load_task
 from stl_lfd.signals import SignalTable, write_signal_csv
 
@@ -62,7 +63,7 @@ class RunDirectory:
 
     @classmethod
     def create(
-        cls, path: Path, task: Task, models: dict[str, HSMM], initial_signals: SignalTable, summary: dict[str, Any], inputs: dict[str, Any] | None = None
+        cls, path: Path, task: Task, models: dict[str, HSMM], initial_signals: SignalTable, summary: Summary, inputs: dict[str, Any] | None = None
     ) -> "RunDirectory":
         """Write a new run directory in one step (built beside it, then renamed into place),
         locked for writing by this process."""
@@ -142,7 +143,7 @@ class RunDirectory:
     def best_models(self) -> dict[str, HSMM]:
         return _load_models(self.path, BEST_MODEL_FILE)
 
-    def summary(self) -> dict[str, Any]:
+    def summary(self) -> Summary:
         path = self.path / SUMMARY_FILE
         try:
             data = json.loads(path.read_text())
@@ -152,7 +153,10 @@ class RunDirectory:
             raise RunError(f"{path}:{error.lineno}: not valid JSON ({error.msg})") from None
         if not isinstance(data, dict) or not _finite(data.get("initial_robustness")):
             raise RunError(f"{path}: damaged (no finite 'initial_robustness')")
-        return data
+        try:
+            return Summary.from_json(data)
+        except (KeyError, TypeError) as error:
+            raise RunError(f"{path}: damaged ({error})") from None
 
     def trials(self) -> list[Trial]:
         """The finished trials, checked: numbered 1, 2, ... and with finite values. A last line
@@ -201,8 +205,8 @@ class RunDirectory:
     def has_best_models(self) -> bool:
         return bool(list(self.path.glob("best_model*.npz")))
 
-    def write_summary(self, summary: dict[str, Any]) -> None:
-        write_atomically(self.path / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
+    def write_summary(self, summary: Summary) -> None:
+        write_atomically(self.path / SUMMARY_FILE, json.dumps(summary.to_json(), indent=2) + "\n")
 
 
 def _model_file(base: str, skill: str) -> str:

@@ -79,7 +79,7 @@ def robustness_per_trial(run: RunData) -> Figure:
     axes = figure.subplots()
     _robustness_curves(axes, run, label_prefix="")
     axes.axhline(0.0, color="k", lw=1)
-    axes.axhline(run.summary["initial_robustness"], color=INITIAL, ls="--", lw=1, label="unoptimised")
+    axes.axhline(run.summary.initial_robustness, color=INITIAL, ls="--", lw=1, label="unoptimised")
     axes.set(xlabel="trial", ylabel=f"{run.task.semantics} robustness", title=f"{run.task.name}: robustness per trial")
     axes.legend(loc="lower right")
     return figure

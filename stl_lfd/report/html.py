@@ -22,12 +22,12 @@ def summary_rows(run: RunData) -> list[tuple[str, str]]:
         ("backend / scene", f"{task.backend} / {task.scene}"),
         ("parameters", f"{run.space.dimension}: {', '.join(run.space.names)}"),
         ("optimiser", f"{task.optimizer.method}, {task.optimizer.initial} Sobol of {task.optimizer.trials} trials, seed {task.optimizer.seed}"),
-        ("trials", f"{summary['trials']} finished, {summary.get('failed_trials', 0)} failed"),
-        ("unoptimised robustness", number(summary["initial_robustness"])),
-        ("best robustness", f"{number(summary['best_robustness'])} (trial {summary['best_trial']})"),
-        ("satisfied", "yes" if summary["satisfied"] else "no"),
-        ("first satisfied at trial", str(summary.get("first_satisfied_trial") or "–")),
-        ("wall time", f"{summary['wall_seconds']:.1f} s"),
+        ("trials", f"{summary.trials} finished, {summary.failed_trials} failed"),
+        ("unoptimised robustness", number(summary.initial_robustness)),
+        ("best robustness", f"{number(summary.best_robustness)} (trial {summary.best_trial})"),
+        ("satisfied", "yes" if summary.satisfied else "no"),
+        ("first satisfied at trial", str(summary.first_satisfied_trial or "–")),
+        ("wall time", f"{summary.wall_seconds:.1f} s"),
     ]
 
 

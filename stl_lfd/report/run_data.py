@@ -10,6 +10,7 @@ import numpy as np
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim import RunDirectory, SearchSpace, Task, Trial, build_search_space
 from stl_lfd.optim.loop import observations
+from stl_lfd.optim.summary import Summary
 from stl_lfd.signals import SignalTable, read_signal_csv
 from stl_lfd.stl import ast, load_spec
 from stl_lfd.stl.regions import region_boxes
@@ -37,7 +38,7 @@ class RunData:
 
     path: Path
     task: Task
-    summary: dict
+    summary: Summary
     models: dict[str, HSMM]
     space: SearchSpace
     trials: list[Trial]
@@ -47,7 +48,7 @@ class RunData:
 
     @property
     def best(self) -> Trial | None:
-        number = self.summary.get("best_trial")
+        number = self.summary.best_trial
         return next((trial for trial in self.trials if trial.trial == number), None)
 
     def best_models(self) -> dict[str, HSMM]:

@@ -14,10 +14,10 @@ from __future__ import annotations
 
 from typing import Callable, Protocol
 
-from stl_lfd.choices import BACKENDS
+from stl_lfd.choices import BACKENDS, RECORDED_SIGNALS
 from stl_lfd.errors import ExecutionError
 from stl_lfd.sim.kinematic import KinematicBackend
-from stl_lfd.sim.reference import RECORDED_SIGNALS, SIMULATION_RATE, TIME_STEP, Reference, Rollout, TrackingWarning, warn_if_untracked
+from stl_lfd.sim.reference import SIMULATION_RATE, TIME_STEP, Reference, Rollout, TrackingWarning, warn_if_untracked
 from stl_lfd.sim.scene import Scene, builtin_scenes, load_scene
 
 
@@ -30,23 +30,37 @@ class Backend(Protocol):
 
     def close(self) -> None: ...
 
+    def __enter__(self) -> "Backend": ...
+
+    def __exit__(self, *exception: object) -> None: ...
+
 
 DEFAULT_RATE = 100.0
 
 _backends: dict[str, Backend] = {}
 
 
-def get_backend(name: str) -> Backend:
-    """The process-wide backend called `name` (worlds are built once and reused)."""
+def new_backend(name: str) -> Backend:
+    """A backend of the caller's own, to close when done; backends are context managers:
+
+    with new_backend("pybullet") as backend:
+        rollout = execute(reference, scene, backend)
+    """
     if name not in BACKENDS:
         raise ExecutionError(f"unknown backend '{name}' (choose from {', '.join(BACKENDS)})")
-    if name not in _backends:
-        if name == "kinematic":
-            _backends[name] = KinematicBackend()
-        else:
-            from stl_lfd.sim.panda import PyBulletBackend
+    if name == "kinematic":
+        return KinematicBackend()
+    from stl_lfd.sim.panda import PyBulletBackend
 
-            _backends[name] = PyBulletBackend()
+    return PyBulletBackend()
+
+
+def get_backend(name: str) -> Backend:
+    """The process-wide backend called `name`, for one-off executions (its worlds are built
+    once and kept until the process ends); code that runs many rollouts owns one with
+    `new_backend`."""
+    if name not in _backends:
+        _backends[name] = new_backend(name)
     return _backends[name]
 
 
@@ -84,5 +98,6 @@ __all__ = [
     "builtin_scenes",
     "execute",
     "get_backend",
+    "new_backend",
     "load_scene",
 ]

@@ -32,3 +32,9 @@ class KinematicBackend:
 
     def close(self) -> None:
         pass
+
+    def __enter__(self) -> "KinematicBackend":
+        return self
+
+    def __exit__(self, *exception: object) -> None:
+        self.close()

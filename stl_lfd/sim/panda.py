@@ -234,7 +234,8 @@ class PandaWorld:
 
 
 class PyBulletBackend:
-    """Runs references on a simulated Panda; keeps one world per scene for the process."""
+    """Runs references on a simulated Panda; keeps one world per scene until `close` (or the
+    end of a `with` block)."""
 
     name = "pybullet"
 
@@ -290,6 +291,12 @@ class PyBulletBackend:
         for world in self._worlds.values():
             world.close()
         self._worlds.clear()
+
+    def __enter__(self) -> "PyBulletBackend":
+        return self
+
+    def __exit__(self, *exception: object) -> None:
+        self.close()
 
 
 def _distance_to_shape(shape: tuple, point: np.ndarray) -> float:

@@ -46,12 +46,12 @@ def test_a_run_writes_its_directory_as_it_goes(tmp_path, learned_model_file):
     assert set(first) >= {"trial", "parameters", "robustness", "satisfied", "wall_seconds", "status"}
     assert len(first["parameters"]) == 12
     assert sorted(path.name for path in (run / "signals").iterdir()) == ["initial.csv"] + [f"trial-000{n}.csv" for n in range(1, 6)]
-    assert json.loads((run / "summary.json").read_text()) == summary
-    assert summary["trials"] == 5 and summary["complete"]
-    assert summary["initial_robustness"] < 0  # the learned skill violates phi1
+    assert json.loads((run / "summary.json").read_text()) == summary.to_json()
+    assert summary.trials == 5 and summary.complete
+    assert summary.initial_robustness < 0  # the learned skill violates phi1
     best = max(json.loads(line)["robustness"] for line in lines)
-    assert summary["best_robustness"] == best
-    assert set(summary) >= {"initial_robustness", "best_robustness", "best_trial", "satisfied", "trials", "wall_seconds"}
+    assert summary.best_robustness == best
+    assert set(summary.to_json()) >= {"initial_robustness", "best_robustness", "best_trial", "satisfied", "trials", "wall_seconds"}
 
 
 def test_a_killed_run_resumes_without_repeating_or_losing_trials(tmp_path, learned_model_file):
@@ -64,7 +64,7 @@ def test_a_killed_run_resumes_without_repeating_or_losing_trials(tmp_path, learn
     lines = trials_file.read_text().splitlines()
     trials_file.write_text("\n".join(lines[:3]) + "\n" + lines[3][:40])
     summary = optimise(resume_run(interrupted, trials=5))
-    assert summary["trials"] == 5
+    assert summary.trials == 5
     resumed = [json.loads(line) for line in trials_file.read_text().splitlines()]
     whole = [json.loads(line) for line in (tmp_path / "whole" / "trials.jsonl").read_text().splitlines()]
     assert [trial["trial"] for trial in resumed] == [1, 2, 3, 4, 5]
@@ -123,8 +123,8 @@ def test_replay_of_a_run_uses_its_spec_and_best_trial(tmp_path, learned_model_fi
 def test_the_paper_budget_satisfies_phi1_on_the_kinematic_backend(tmp_path):
     task = load_task(ROOT / "configs" / "phi1.yaml").with_overrides(backend="kinematic")
     summary = optimise(start_run(task, tmp_path / "phi1"))
-    assert summary["initial_robustness"] < 0
-    assert summary["satisfied"] and summary["best_robustness"] > 0.005
+    assert summary.initial_robustness < 0
+    assert summary.satisfied and summary.best_robustness > 0.005
     run = RunDirectory(tmp_path / "phi1")
     space = build_search_space(run.models(), task.parameters)
     for trial in run.trials():
@@ -168,4 +168,4 @@ def test_recorded_parts_compose_to_the_recorded_robustness_exactly(tmp_path, lea
     for trial in trials:
         assert list(trial["components"]) == list(parts.names)
         assert parts.compose(list(trial["components"].values())) == trial["robustness"]
-    assert parts.compose(list(summary["initial_components"].values())) == summary["initial_robustness"]
+    assert parts.compose(list(summary.initial_components.values())) == summary.initial_robustness

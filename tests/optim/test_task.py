@@ -35,7 +35,7 @@ GOOD_PARAMETERS = "parameters:\n  means: {components: [2]}\n"
         ("paramters: {}\n", "unknown key 'paramters'"),
         (GOOD_PARAMETERS + "optimizer: {initial: 10, trials: 5}\n", r"'optimizer.initial' \(10\) exceeds 'optimizer.trials' \(5\)"),
         (GOOD_PARAMETERS + "optimizer: {method: ucb}\n", "'optimizer.method' must be one of stl, pi, logei, random"),
-        (GOOD_PARAMETERS + "semantics: fuzzy\n", "'semantics' must be one of new, classic"),
+        (GOOD_PARAMETERS + "semantics: fuzzy\n", "'semantics' must be one of classic, new"),
         (GOOD_PARAMETERS + "nu: -1\n", "'nu' must be positive"),
         ("parameters:\n  means: {components: [2], beta: 0}\n", "'parameters.means.beta' must be positive"),
         ("parameters:\n  means: {components: []}\n", "'parameters.means.components' must be a non-empty list"),
