@@ -108,7 +108,14 @@ def test_two_concurrent_resumes_one_proceeds_one_refuses(tmp_path, learned_model
 def test_ctrl_c_keeps_the_trials_and_dies_by_sigint(tmp_path, learned_model_file):
     task = small_task(tmp_path, learned_model_file)
     run = tmp_path / "run"
-    process = subprocess.Popen([STLOPT, "optimize", str(task), "--out", str(run), "-N", "30"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # A shell that ran the tests in the background left SIGINT ignored, which children inherit.
+    process = subprocess.Popen(
+        [STLOPT, "optimize", str(task), "--out", str(run), "-N", "30"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     _wait_for(lambda: (run / "trials.jsonl").exists() and len((run / "trials.jsonl").read_text().splitlines()) >= 3)
     process.send_signal(signal.SIGINT)
     out, err = process.communicate(timeout=120)
