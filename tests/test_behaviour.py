@@ -79,6 +79,7 @@ def pick_insert_models():
     return behaviour_models(load_behaviour(BEHAVIOUR))
 
 
+@pytest.mark.slow
 def test_the_unoptimised_behaviour_picks_then_pushes_the_shaft_onto_the_holder(pick_insert_models):
     import warnings
 

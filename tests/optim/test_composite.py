@@ -62,6 +62,7 @@ def test_parts_of_failed_trials_enter_at_their_worst():
     assert part_observations(history, PARTS.names) is None
 
 
+@pytest.mark.slow
 def test_stl_method_is_reproducible_and_resumes_exactly():
     optimizer = Optimizer("stl", initial=4, trials=8, seed=2)
     first = run(optimizer)
@@ -72,6 +73,7 @@ def test_stl_method_is_reproducible_and_resumes_exactly():
     assert all(np.all((t.x >= BOUNDS[0]) & (t.x <= BOUNDS[1])) for t in first)
 
 
+@pytest.mark.slow
 def test_stl_method_satisfies_a_conjunction_that_random_search_does_not():
     found = [best_trial(run(Optimizer("stl", initial=5, trials=20, seed=seed))).robustness for seed in range(2)]
     random = [best_trial(run(Optimizer("random", initial=5, trials=20, seed=seed))).robustness for seed in range(2)]

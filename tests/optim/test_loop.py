@@ -48,6 +48,7 @@ def test_every_method_stays_inside_the_bounds_and_shares_the_initial_design(meth
     assert [trial.phase for trial in history][3:] == [method] * 4
 
 
+@pytest.mark.slow
 def test_the_acquisition_improves_on_the_initial_design():
     history = run(Optimizer("pi", initial=5, trials=20, seed=0))
     best_initial = max(trial.robustness for trial in history[:5])

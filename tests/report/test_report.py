@@ -75,6 +75,7 @@ def test_report_errors_are_one_line(run_dir, tmp_path):
     assert bad.exit_code == 5 and "is not a parameter of the run" in bad.stderr
 
 
+@pytest.mark.slow
 def test_report_of_a_behaviour_run_draws_each_skill(tmp_path):
     from stl_lfd.optim import load_task
 
