@@ -80,8 +80,9 @@ def read_text(path: Path | str, what: str) -> str:
 
 @contextmanager
 def atomic_output(path: Path | str) -> Iterator[Path]:
-    """A temporary path beside `path` to write to; renamed to `path` when the block succeeds,
-    removed when it fails. The file gets the permissions of an ordinary new file (umask)."""
+    """A temporary path beside `path` to write to; synced to disk and renamed to `path` when the
+    block succeeds, removed when it fails. The file gets the permissions of an ordinary new file
+    (umask)."""
     path = Path(path)
     descriptor, name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
     os.close(descriptor)
@@ -89,6 +90,8 @@ def atomic_output(path: Path | str) -> Iterator[Path]:
     try:
         yield temporary
         os.chmod(temporary, 0o666 & ~_umask())
+        with open(temporary, "rb") as written:  # on disk before it replaces the old file
+            os.fsync(written.fileno())
         os.replace(temporary, path)
     except OSError as error:
         temporary.unlink(missing_ok=True)

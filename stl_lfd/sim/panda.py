@@ -316,13 +316,11 @@ def _distance_to_shape(shape: tuple, point: np.ndarray) -> float:
 
 def low_pass(values: np.ndarray, cutoff_hz: float, period: float) -> np.ndarray:
     """First-order low-pass filter, as a force sensor's electronics would apply (starts at 0)."""
+    from scipy.signal import lfilter
+
     gain = 1.0 - math.exp(-2.0 * math.pi * cutoff_hz * period)
-    filtered = np.empty_like(values)
-    state = 0.0
-    for index, value in enumerate(values):
-        state += gain * (value - state)
-        filtered[index] = state
-    return filtered
+    # y[n] = y[n-1] + gain (x[n] - y[n-1])
+    return lfilter([gain], [1.0, gain - 1.0], values)
 
 
 def _record(step_times, positions, fingers, forces, reference: Reference, rate: float) -> Rollout:
