@@ -12,8 +12,7 @@ The public API, loaded on first use (so `import stl_lfd` loads neither torch nor
 
 from __future__ import annotations
 
-from importlib import import_module
-from typing import Any
+from stl_lfd.lazy import lazy_exports
 
 __version__ = "0.1.0"
 
@@ -40,16 +39,4 @@ _HOMES = {
     "load_task": "stl_lfd.optim.task",
 }
 
-__all__ = sorted(_HOMES)
-
-
-def __getattr__(name: str) -> Any:
-    if name not in _HOMES:
-        raise AttributeError(f"module 'stl_lfd' has no attribute {name!r}")
-    value = getattr(import_module(_HOMES[name]), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(list(globals()) + __all__)
+__all__, __getattr__, __dir__ = lazy_exports("stl_lfd", _HOMES, globals())

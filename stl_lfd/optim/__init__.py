@@ -15,8 +15,7 @@ say) does not load the whole optimiser.
 
 from __future__ import annotations
 
-from importlib import import_module
-from typing import Any
+from stl_lfd.lazy import lazy_exports
 
 _HOMES = {
     "Trial": "stl_lfd.optim.loop",
@@ -37,16 +36,4 @@ _HOMES = {
     "Result": "stl_lfd.optim.api",
 }
 
-__all__ = sorted(_HOMES)
-
-
-def __getattr__(name: str) -> Any:
-    if name not in _HOMES:
-        raise AttributeError(f"module 'stl_lfd.optim' has no attribute {name!r}")
-    value = getattr(import_module(_HOMES[name]), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(list(globals()) + __all__)
+__all__, __getattr__, __dir__ = lazy_exports("stl_lfd.optim", _HOMES, globals())
