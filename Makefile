@@ -28,11 +28,16 @@ run: $(STAMP)
 	@echo "summary.json, trials.jsonl and signals/, and the figures in $(RUN_DIR)/phi1/report/index.html."
 	@echo "Watch the result: $(BIN)/stlopt replay $(RUN_DIR)/phi1 --video $(RUN_DIR)/phi1-best.mp4"
 
+# Two test processes (one per core), each single-threaded: BLAS and torch threads of two
+# processes would otherwise compete for the same two cores. `worksteal` keeps both busy while
+# the long end-to-end tests run.
+PYTEST := OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 $(BIN)/python -m pytest -q -n 2 --dist worksteal
+
 test: $(STAMP) lint
-	$(BIN)/python -m pytest -q
+	$(PYTEST)
 
 test-fast: $(STAMP) lint
-	$(BIN)/python -m pytest -q -m "not slow"
+	$(PYTEST) -m "not slow"
 
 lint: $(STAMP)
 	$(BIN)/ruff check stl_lfd tests benchmarks

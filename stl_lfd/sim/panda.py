@@ -137,6 +137,10 @@ class PandaWorld:
                 break
         for joint in FINGER_JOINTS:
             client.resetJointState(self.robot, joint, opening / 2)
+        # restoreState leaves the previous rollout's contact points (and their forces) in place
+        # until the next step: a rollout after one that pushed into the floor started with a
+        # force spike. Collision detection at the reset pose replaces them.
+        client.performCollisionDetection()
 
     def command(self, position: np.ndarray, opening: float) -> None:
         """Send joint targets that bring the hand to `position` and the fingers to `opening`."""

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from stl_lfd.errors import ExecutionError
-from stl_lfd.sim import Reference, TrackingWarning, execute, load_scene
+from stl_lfd.sim import Reference, TrackingWarning, execute, load_scene, new_backend
 from stl_lfd.skill.execution import reference_of, rollout_model
 
 SCENE = load_scene("free_space")
@@ -78,3 +78,15 @@ def test_a_trajectory_with_nan_is_refused_before_execution(reference):
 def test_rollout_model_defaults_to_the_expected_duration(learned_model):
     rollout = rollout_model(learned_model, SCENE, "kinematic", rate=10.0)
     assert rollout.signals.duration == pytest.approx(learned_model.expected_duration(), abs=0.1)
+
+
+def test_a_rollout_after_one_that_pushed_into_the_floor_starts_without_force():
+    times = np.linspace(0.0, 2.0, 481)
+    hold = np.column_stack([np.full_like(times, 0.5), np.zeros_like(times), np.full_like(times, 0.4)])
+    push = hold - np.column_stack([np.zeros_like(times), np.zeros_like(times), np.clip(times - 0.5, 0.0, 1.0) * 0.5 + 0.1])
+    with new_backend("pybullet") as backend, warnings.catch_warnings():
+        warnings.simplefilter("ignore", TrackingWarning)
+        pushed = execute(Reference(times, push), SCENE, backend)
+        after = execute(Reference(times, hold), SCENE, backend)
+    assert pushed.signals.columns["force"].max() > 10.0
+    assert np.all(after.signals.columns["force"] == 0.0)
