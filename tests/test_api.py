@@ -26,6 +26,7 @@ def readme_python_blocks() -> list[str]:
     return re.findall(r"```python\n(.*?)```", section, flags=re.S)
 
 
+@pytest.mark.slow
 def test_the_readme_python_examples_run(monkeypatch, capsys):
     blocks = readme_python_blocks()
     assert len(blocks) == 3
@@ -47,6 +48,7 @@ def test_import_stl_lfd_is_lazy():
         stl_lfd.nothing_here  # noqa: B018 (the attribute access is the test)
 
 
+@pytest.mark.slow
 def test_optimize_from_objects_reproduces_the_command_lines_trials(tmp_path, learned_model, learned_model_file):
     task = small_task(tmp_path, learned_model_file)  # kinematic, 50 Hz, 22 s, means of 2-3 and all durations, 3 + 2 trials, seed 2
     assert CliRunner().invoke(app, ["optimize", str(task), "--out", str(tmp_path / "run")]).exit_code == 0

@@ -22,6 +22,7 @@ def learned():
     return learn_from_folder(DEMOS, 6)
 
 
+@pytest.mark.slow
 def test_learn_writes_a_model_and_a_summary(tmp_path: Path):
     result = runner.invoke(app, ["learn", str(DEMOS), "-K", "6", "-o", str(tmp_path / "m.npz"), "--plot", str(tmp_path / "s.png")])
     assert result.exit_code == 0, result.stderr

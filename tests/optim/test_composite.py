@@ -81,6 +81,7 @@ def test_stl_method_satisfies_a_conjunction_that_random_search_does_not():
     assert max(random) < min(found)
 
 
+@pytest.mark.slow
 def test_a_spec_that_is_not_a_conjunction_runs_through_the_same_path():
     single = split_spec(parse("F a > 0"), "new")
 

@@ -22,6 +22,7 @@ def points(history):
     return np.array([trial.x for trial in history])
 
 
+@pytest.mark.slow
 def test_the_same_seed_gives_the_same_trials():
     optimizer = Optimizer("pi", initial=4, trials=8, seed=3)
     first, second = run(optimizer), run(optimizer)
@@ -30,6 +31,7 @@ def test_the_same_seed_gives_the_same_trials():
     assert not np.allclose(points(first)[:4], points(other)[:4])
 
 
+@pytest.mark.slow
 def test_resuming_from_a_recorded_history_continues_exactly():
     optimizer = Optimizer("pi", initial=4, trials=9, seed=1)
     uninterrupted = run(optimizer)
@@ -56,6 +58,7 @@ def test_the_acquisition_improves_on_the_initial_design():
     assert best_trial(history).robustness > 0.2
 
 
+@pytest.mark.slow
 def test_a_failing_trial_is_recorded_and_the_loop_goes_on():
     calls = []
 

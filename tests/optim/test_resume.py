@@ -20,6 +20,7 @@ runner = CliRunner()
 STLOPT = str(Path(sys.executable).parent / "stlopt")
 
 
+@pytest.mark.slow
 def test_the_same_command_plus_resume_works_for_every_option(tmp_path, learned_model_file):
     task = small_task(tmp_path, learned_model_file)
     options = [

@@ -54,6 +54,7 @@ def test_a_run_writes_its_directory_as_it_goes(tmp_path, learned_model_file):
     assert set(summary.to_json()) >= {"initial_robustness", "best_robustness", "best_trial", "satisfied", "trials", "wall_seconds"}
 
 
+@pytest.mark.slow
 def test_a_killed_run_resumes_without_repeating_or_losing_trials(tmp_path, learned_model_file):
     task = load_task(small_task(tmp_path, learned_model_file))
     optimise(start_run(task, tmp_path / "whole"))
@@ -106,6 +107,7 @@ def test_cli_optimize_prints_the_summary_and_protects_existing_runs(tmp_path, le
     assert "resuming after trial 4" in extended.stderr
 
 
+@pytest.mark.slow
 def test_replay_of_a_run_uses_its_spec_and_best_trial(tmp_path, learned_model_file):
     out = tmp_path / "run"
     optimise(start_run(load_task(small_task(tmp_path, learned_model_file)), out))
@@ -156,6 +158,7 @@ def test_ctrl_c_keeps_the_finished_trials_and_says_how_to_resume(tmp_path, learn
     assert json.loads(resumed.stdout)["trials"] == 5
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("semantics", ["classic", "new"])
 def test_recorded_parts_compose_to_the_recorded_robustness_exactly(tmp_path, learned_model_file, semantics):
     from stl_lfd.stl import load_spec, split_spec

@@ -35,6 +35,7 @@ def assert_picture(path):
     assert pixels.std() > 5  # not a blank canvas
 
 
+@pytest.mark.slow
 def test_report_writes_every_figure_and_an_index(run_dir, tmp_path):
     out = tmp_path / "report"
     result = runner.invoke(app, ["report", str(run_dir), "--out", str(out)])
@@ -51,6 +52,7 @@ def test_report_writes_every_figure_and_an_index(run_dir, tmp_path):
     assert not (out / "forces.png").exists()  # the kinematic backend touches nothing
 
 
+@pytest.mark.slow
 def test_forces_and_comparison_when_the_data_is_there(run_dir, tmp_path):
     touched = tmp_path / "touched"
     import shutil

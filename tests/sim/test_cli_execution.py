@@ -72,6 +72,7 @@ def test_gui_without_a_display_is_a_clear_error(learned_model_file, monkeypatch)
     assert result.stderr.strip() == "error: --gui needs a display and DISPLAY is not set; record a video with --video FILE.mp4 instead"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("suffix", [".gif", ".mp4"])
 def test_headless_replay_writes_a_video_with_one_frame_per_tick(learned_model_file, tmp_path, suffix):
     video = tmp_path / f"replay{suffix}"

@@ -49,6 +49,7 @@ def test_kinematic_backend_records_the_reference(reference):
     assert rollout.tracking_max == 0.0
 
 
+@pytest.mark.slow
 def test_unreachable_targets_warn_with_the_worst_error(reference):
     far = Reference(reference.times, reference.positions + np.array([0.6, 0.0, 0.0]))
     with pytest.warns(TrackingWarning, match=r"worst tracking error \d+\.\d mm at t = .* outside the workspace"):

@@ -20,6 +20,7 @@ def close(a: float, b: float, tolerance: float = 1e-9) -> bool:
     return abs(a - b) <= tolerance * max(1.0, abs(a), abs(b))
 
 
+@pytest.mark.slow
 @given(formulas, traces())
 def test_classic_equals_reference_at_every_sample(formula, trace):
     signals, times = trace
@@ -69,6 +70,7 @@ def test_batch_equals_each_trace(formula, trace, semantics):
         assert close(batch[index], single, 1e-12)
 
 
+@pytest.mark.slow
 @given(formulas)
 @settings(max_examples=300)
 def test_printed_formula_parses_to_the_same_tree(formula):
