@@ -11,7 +11,7 @@ from typing import Callable
 
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm import HSMM, retrieve
-from stl_lfd.sim import DEFAULT_RATE, SIMULATION_RATE, Reference, Rollout, Scene, execute, load_scene
+from stl_lfd.sim import DEFAULT_RATE, SIMULATION_RATE, Backend, Reference, Rollout, Scene, execute, load_scene
 
 POSITION_SIGNALS = ("x", "y", "z")
 
@@ -30,7 +30,7 @@ def reference_of(model: HSMM, duration: float | None = None) -> Reference:
 def rollout_model(
     model: HSMM,
     scene: Scene,
-    backend: str = "pybullet",
+    backend: str | Backend = "pybullet",
     duration: float | None = None,
     rate: float = DEFAULT_RATE,
     observer: Callable | None = None,
