@@ -78,3 +78,20 @@ def test_settings_are_checked_when_objects_are_made():
         stl_lfd.Optimizer(method="magic")
     with pytest.raises(ConfigError, match="seed"):
         stl_lfd.Optimizer(seed=-1)
+
+
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: stl_lfd.MeanParameters(components=(2, 2)), "lists a state twice"),
+        (lambda: stl_lfd.MeanParameters(components=(0,)), "state numbers from 1"),
+        (lambda: stl_lfd.MeanParameters(components=(2,), coordinates=("w",)), "may hold x, y, z"),
+        (lambda: stl_lfd.MeanParameters(components=(2,), beta=0), "'means.beta' must be positive"),
+        (lambda: stl_lfd.DurationParameters(components="all", width=-1), "'durations.width' must be positive"),
+        (lambda: stl_lfd.Parameters(transitions="diag"), "'transitions' must be one of none, band, full"),
+        (lambda: stl_lfd.Parameters(), "select nothing to optimise"),
+    ],
+)
+def test_parameters_are_checked_when_made(make, message):
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        make()

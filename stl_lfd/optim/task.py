@@ -32,6 +32,14 @@ class MeanParameters:
     beta: float = 2.0
     together: bool = False
 
+    def __post_init__(self) -> None:
+        _check_states(self.components, "means.components")
+        unknown = [coordinate for coordinate in self.coordinates if coordinate not in COORDINATES]
+        if unknown or not self.coordinates:
+            raise ConfigError(f"'means.coordinates' may hold x, y, z (got {shown(list(self.coordinates))})")
+        if not self.beta > 0:
+            raise ConfigError(f"'means.beta' must be positive (got {self.beta})")
+
 
 @dataclass(frozen=True)
 class DurationParameters:
@@ -40,12 +48,34 @@ class DurationParameters:
     components: tuple[int, ...] | str = ()
     width: float = 1.0
 
+    def __post_init__(self) -> None:
+        if self.components != "all":
+            _check_states(self.components, "durations.components")
+        if not self.width > 0:
+            raise ConfigError(f"'durations.width' must be positive (got {self.width})")
+
 
 @dataclass(frozen=True)
 class Parameters:
+    """What moves in one skill: state means, duration means, transitions (`none`, `band`, `full`)."""
+
     means: MeanParameters = field(default_factory=MeanParameters)
     durations: DurationParameters = field(default_factory=DurationParameters)
     transitions: str = "none"
+
+    def __post_init__(self) -> None:
+        if self.transitions not in TRANSITIONS:
+            raise ConfigError(f"'transitions' must be one of {', '.join(TRANSITIONS)} (got {shown(self.transitions)})")
+        if not self.means.components and not self.durations.components and self.transitions == "none":
+            raise ConfigError("the parameters select nothing to optimise")
+
+
+def _check_states(components: tuple[int, ...], key: str) -> None:
+    """1-based state numbers, each once (whether they exist is checked against the model)."""
+    if any(isinstance(state, bool) or not isinstance(state, int) or state < 1 for state in components):
+        raise ConfigError(f"'{key}' must hold state numbers from 1 (got {shown(list(components))})")
+    if len(set(components)) != len(components):
+        raise ConfigError(f"'{key}' lists a state twice ({list(components)})")
 
 
 @dataclass(frozen=True)
@@ -228,10 +258,10 @@ def _parameters(data: Any, path: Path, where: str) -> Parameters:
             width=number(item.get("width", 1.0), path, f"{where}.durations.width", positive=True),
         )
     transitions = _choice(data.get("transitions", "none"), TRANSITIONS, path, f"{where}.transitions")
-    parameters = Parameters(means, durations, transitions)
     if not means.components and not durations.components and transitions == "none":
         raise ConfigError(f"{path}: '{where}' selects nothing to optimise")
-    return parameters
+    with _located(path):
+        return Parameters(means, durations, transitions)
 
 
 def _optimizer(data: Any, path: Path) -> Optimizer:
