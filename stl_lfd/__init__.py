@@ -4,7 +4,7 @@ The public API, loaded on first use (so `import stl_lfd` loads neither torch nor
 
 - STL: `Spec` (`Spec.parse`, `Spec.load`, `.robustness`, `.trace`, `.components`), `compile_spec`;
 - signals: `SignalTable`, `read_signal_csv`, `write_signal_csv`;
-- skills: `HSMM` (`fit`, `predict`, `sample`), `learn_from_folder`, `load_model`, `save_model`,
+- skills: `HSMM` (`fit`, `predict`, `sample`), `learn`, `learn_from_folder`, `load_model`, `save_model`,
   `retrieve`; `load_scene`, `execute`, `rollout_model`;
 - optimisation: `optimize` -> `Result`, with `Parameters`, `MeanParameters`,
   `DurationParameters` and `Optimizer`; `load_task` for task files.
@@ -23,6 +23,7 @@ _HOMES = {
     "read_signal_csv": "stl_lfd.signals",
     "write_signal_csv": "stl_lfd.signals",
     "HSMM": "stl_lfd.hsmm",
+    "learn": "stl_lfd.hsmm",
     "learn_from_folder": "stl_lfd.hsmm",
     "load_model": "stl_lfd.hsmm",
     "save_model": "stl_lfd.hsmm",

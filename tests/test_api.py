@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 import stl_lfd
 from stl_lfd.cli import app
-from stl_lfd.errors import ConfigError
+from stl_lfd.errors import ConfigError, ModelError
 from tests.conftest import ROOT
 from tests.optim.test_run import small_task
 
@@ -95,3 +95,13 @@ def test_settings_are_checked_when_objects_are_made():
 def test_parameters_are_checked_when_made(make, message):
     with pytest.raises(ConfigError, match=re.escape(message)):
         make()
+
+
+def test_learning_from_tables_in_memory_equals_learning_from_the_folder():
+    folder = ROOT / "demos" / "three_regions"
+    tables = [stl_lfd.read_signal_csv(path) for path in sorted(folder.glob("*.csv"))]
+    in_memory, _ = stl_lfd.learn(tables, 6)
+    from_folder, _ = stl_lfd.learn_from_folder(folder, 6)
+    assert np.array_equal(in_memory.means_, from_folder.means_) and np.array_equal(in_memory.transmat_, from_folder.transmat_)
+    with pytest.raises(ModelError, match="no demonstrations"):
+        stl_lfd.learn([], 6)

@@ -2,8 +2,8 @@
 
 from stl_lfd.hsmm.demos import load_demos
 from stl_lfd.hsmm.io import load_model, save_model
-from stl_lfd.hsmm.learn import learn_from_folder, summary_rows
+from stl_lfd.hsmm.learn import learn, learn_from_folder, summary_rows
 from stl_lfd.hsmm.model import HSMM
 from stl_lfd.hsmm.retrieval import Trajectory, retrieve
 
-__all__ = ["HSMM", "Trajectory", "learn_from_folder", "load_demos", "load_model", "retrieve", "save_model", "summary_rows"]
+__all__ = ["HSMM", "Trajectory", "learn", "learn_from_folder", "load_demos", "load_model", "retrieve", "save_model", "summary_rows"]

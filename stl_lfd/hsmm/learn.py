@@ -11,6 +11,7 @@ from stl_lfd.errors import ModelError
 from stl_lfd.hsmm.demos import load_demos, median_period, resample
 from stl_lfd.hsmm.model import HSMM
 from stl_lfd.limits import MAX_STATES, samples_problem
+from stl_lfd.signals import SignalTable
 
 # Demonstrations are resampled no finer than this (s): hand-guided motions have no content
 # above a few hertz, and EM, state sequences and tracking all cost time per sample.
@@ -18,7 +19,13 @@ COARSEST_DEFAULT_PERIOD = 0.02
 
 
 def learn_from_folder(folder: str | Path, n_states: int = 6, sample_period: float | None = None) -> tuple[HSMM, list[np.ndarray]]:
-    """Load, resample to one period and fit.
+    """Load every demonstration CSV of `folder`, then `learn`."""
+    _check_settings(n_states, sample_period)
+    return learn(load_demos(folder), n_states, sample_period, source=str(folder))
+
+
+def learn(demos: list[SignalTable], n_states: int = 6, sample_period: float | None = None, source: str = "demonstrations") -> tuple[HSMM, list[np.ndarray]]:
+    """Resample the demonstrations (signal tables with the same columns) to one period and fit.
 
     The default period is the demonstrations' median period, but not finer than
     `COARSEST_DEFAULT_PERIOD` (50 Hz).
@@ -26,11 +33,9 @@ def learn_from_folder(folder: str | Path, n_states: int = 6, sample_period: floa
     Returns:
         the fitted model and the resampled demonstrations (`T_i x D` each).
     """
-    if not 1 <= n_states <= MAX_STATES:
-        raise ModelError(f"K must be from 1 to {MAX_STATES} (got {n_states})")
-    if sample_period is not None and not (math.isfinite(sample_period) and sample_period > 0):
-        raise ModelError(f"the sample period must be a positive number of seconds (got {sample_period:g})")
-    demos = load_demos(folder)
+    _check_settings(n_states, sample_period)
+    if not demos:
+        raise ModelError(f"{source}: no demonstrations to learn from")
     period = max(median_period(demos), COARSEST_DEFAULT_PERIOD) if sample_period is None else sample_period
     longest = max(demos, key=lambda demo: demo.duration)
     problem = samples_problem(longest.duration, 1.0 / period)
@@ -40,11 +45,18 @@ def learn_from_folder(folder: str | Path, n_states: int = 6, sample_period: floa
     shortest = min(len(sequence) for sequence in sequences)
     if shortest < 2 * n_states:
         raise ModelError(
-            f"{folder}: K = {n_states} needs at least {2 * n_states} samples per demonstration (the shortest has {shortest} after resampling); use a smaller K"
+            f"{source}: K = {n_states} needs at least {2 * n_states} samples per demonstration (the shortest has {shortest} after resampling); use a smaller K"
         )
     model = HSMM(n_states=n_states)
     model.fit(np.concatenate(sequences), np.array([len(s) for s in sequences]), period, list(demos[0].columns))
     return model, sequences
+
+
+def _check_settings(n_states: int, sample_period: float | None) -> None:
+    if not 1 <= n_states <= MAX_STATES:
+        raise ModelError(f"K must be from 1 to {MAX_STATES} (got {n_states})")
+    if sample_period is not None and not (math.isfinite(sample_period) and sample_period > 0):
+        raise ModelError(f"the sample period must be a positive number of seconds (got {sample_period:g})")
 
 
 def summary_rows(model: HSMM) -> list[dict]:
