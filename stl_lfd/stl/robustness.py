@@ -105,6 +105,12 @@ class Robustness:
         self.source = source
         self.signals = frozenset(node.name for node in formula.walk() if isinstance(node, ast.Signal))
         self.horizon = horizon(formula)
+        # The bounded `G`/`F` and their window lengths (s), for the cost warning of `_prepare`.
+        self._windows = [
+            (node, node.interval.hi - node.interval.lo)
+            for node in formula.walk()
+            if isinstance(node, (ast.Always, ast.Eventually)) and node.interval is not None
+        ]
         self._evaluate = _compile(formula, semantics)
 
     def __call__(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> float | np.ndarray:
@@ -161,11 +167,7 @@ class Robustness:
         if self.semantics.name != "new" or times.size < 2:
             return
         step = float(times[-1] - times[0]) / (times.size - 1)
-        windows = [
-            (node, min(times.size, (node.interval.hi - node.interval.lo) / step + 1))
-            for node in self.formula.walk()
-            if isinstance(node, (ast.Always, ast.Eventually)) and node.interval is not None
-        ]
+        windows = [(node, min(times.size, seconds / step + 1)) for node, seconds in self._windows]
         operations = batch * times.size * sum(width for _, width in windows)
         if operations > COSTLY_OPERATIONS:
             node, width = max(windows, key=lambda item: item[1])
