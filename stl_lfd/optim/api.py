@@ -13,7 +13,6 @@ To record a run directory (resumable, for `stlopt report`), use a task file with
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -22,7 +21,7 @@ from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM
 from stl_lfd.limits import samples_problem
 from stl_lfd.optim.loop import Trial, best_trial
-from stl_lfd.optim.run import PreparedRun, objective_for, optimise
+from stl_lfd.optim.run import PreparedRun, optimise, prepare_objective
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import SINGLE_SKILL, Optimizer, Parameters, Task
 from stl_lfd.signals import SignalTable
@@ -36,18 +35,12 @@ class Result:
     Attributes:
         best_models: skill name -> adapted model of the best trial (`skill` for one skill); the
             unoptimised models when no trial succeeded.
-        best_robustness: robustness of the best trial, None when every trial failed.
-        best_trial: the best `Trial`, or None.
-        initial_robustness: robustness of the unoptimised skill.
         history: every trial in order.
         summary: the run's `Summary` (what `summary.json` holds).
         signals: trial number -> recorded signals (0 is the unoptimised skill).
     """
 
     best_models: dict[str, HSMM]
-    best_robustness: float | None
-    best_trial: Trial | None
-    initial_robustness: float
     history: list[Trial]
     summary: Summary
     signals: dict[int, SignalTable] = field(default_factory=dict, repr=False)
@@ -60,8 +53,22 @@ class Result:
         return self.best_models[SINGLE_SKILL]
 
     @property
+    def best_trial(self) -> Trial | None:
+        """The trial of highest robustness, None when every trial failed."""
+        return best_trial(self.history)
+
+    @property
+    def best_robustness(self) -> float | None:
+        return self.summary.best_robustness
+
+    @property
+    def initial_robustness(self) -> float:
+        """Robustness of the unoptimised skill."""
+        return self.summary.initial_robustness
+
+    @property
     def satisfied(self) -> bool:
-        return self.best_robustness is not None and self.best_robustness > 0
+        return self.summary.satisfied
 
 
 class MemoryRun:
@@ -71,8 +78,6 @@ class MemoryRun:
         self.signals: dict[int, SignalTable] = {0: initial_signals}
         self.trials: list[Trial] = []
         self.best_models: dict[str, HSMM] | None = None
-        self.summary: Summary | None = None
-        self.path = Path("<memory>")
 
     def append_trial(self, trial: Trial, signals: SignalTable | None) -> None:
         self.trials.append(trial)
@@ -86,7 +91,7 @@ class MemoryRun:
         return self.best_models is not None
 
     def write_summary(self, summary: Summary) -> None:
-        self.summary = summary
+        """Nothing to keep: `optimise` returns the final summary."""
 
     def close(self) -> None:
         pass
@@ -132,16 +137,8 @@ def optimize(
         scene=scene, backend=backend, semantics=semantics, nu=nu, duration=float(duration), rate=float(rate),
         parameters=parameters, optimizer=optimizer or Optimizer(), source=Path("<python>"),
     )  # fmt: skip
-    space, objective = objective_for(task, models, spec.tree)
-    start = time.perf_counter()
-    try:
-        initial = objective.evaluate(models)
-    except BaseException:
-        objective.close()
-        raise
-    summary = Summary.of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
+    space, objective, initial, summary = prepare_objective(task, models, spec.tree)
     record = MemoryRun(initial.payload)
     with PreparedRun(task, record, models, space, objective, [], summary) as prepared:
         summary = optimise(prepared, on_trial)
-    best = best_trial(record.trials)
-    return Result(record.best_models or models, summary.best_robustness, best, summary.initial_robustness, record.trials, summary, record.signals)
+    return Result(record.best_models or models, record.trials, summary, record.signals)

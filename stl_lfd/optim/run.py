@@ -20,7 +20,7 @@ from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import SINGLE_SKILL, Task
 from stl_lfd.sim import RECORDED_SIGNALS, Scene, execute, load_scene, new_backend
 from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
-from stl_lfd.stl import SpecParts, ast, compile_spec, load_spec, split_spec
+from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
 
 
 class SkillObjective:
@@ -83,19 +83,33 @@ def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = N
     and windows that reach past the rollout duration."""
     space = build_search_space(models, task.parameters, task.source)
     spec = load_spec(task.spec) if spec is None else spec
-    robustness = compile_spec(spec, task.semantics, task.nu, source=str(task.spec))
-    if robustness.horizon > task.duration + 1e-9:
+    parts = split_spec(spec, task.semantics, task.nu, source=str(task.spec))
+    horizon = max(function.horizon for function in parts.functions)  # a conjunction looks as far as its parts
+    if horizon > task.duration + 1e-9:
         raise ConfigError(
-            f"{task.source}: the spec {task.spec.name} looks {robustness.horizon:g} s ahead but rollouts last "
+            f"{task.source}: the spec {task.spec.name} looks {horizon:g} s ahead but rollouts last "
             f"{task.duration:g} s ('duration'); lengthen the rollouts or shorten the spec's windows"
         )
     recorded = set(RECORDED_SIGNALS)
-    unknown = sorted(set(robustness.signals) - recorded)
+    unknown = sorted(set().union(*(function.signals for function in parts.functions)) - recorded)
     if unknown:
         raise SpecError(f"signal {', '.join(unknown)} is not recorded by rollouts (they record {', '.join(sorted(recorded))})", str(task.spec))
     behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None
-    parts = split_spec(spec, task.semantics, task.nu, source=str(task.spec))
     return space, SkillObjective(models, space, task, behaviour, load_scene(task.scene), parts)
+
+
+def prepare_objective(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = None) -> tuple[SearchSpace, SkillObjective, Outcome, Summary]:
+    """`objective_for`, then the unoptimised skill executed once: the space, the objective (which
+    the caller closes), the unoptimised outcome and the summary of a run with no trial yet."""
+    space, objective = objective_for(task, models, spec)
+    try:
+        start = time.perf_counter()
+        initial = objective.evaluate(models)
+    except BaseException:
+        objective.close()
+        raise
+    summary = Summary.of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
+    return space, objective, initial, summary
 
 
 def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lambda message: None, inputs: dict[str, Any] | None = None) -> PreparedRun:
@@ -106,11 +120,8 @@ def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lam
     if task.model is None:
         learn_progress(f"learning the skills of {task.source.name}")
     models = task_models(task)
-    space, objective = objective_for(task, models)
+    space, objective, initial, summary = prepare_objective(task, models)
     try:
-        start = time.perf_counter()
-        initial = objective.evaluate(models)
-        summary = Summary.of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
         inputs = inputs if inputs is not None else inputs_record(task, {}, task)
         run = RunDirectory.create(out, task, models, initial.payload, summary, inputs)
     except BaseException:
