@@ -12,6 +12,7 @@ from typing import Any, Iterable
 
 import yaml
 
+from stl_lfd.dag import fold
 from stl_lfd.errors import ConfigError
 from stl_lfd.files import UnreadableFile, read_text
 
@@ -74,17 +75,7 @@ def read_yaml(path: Path | str) -> dict[str, Any]:
 def _expanded_size(root: yaml.Node) -> int:
     """The number of values the document has once every alias is expanded (shared nodes
     counted once per use), computed without expanding anything."""
-    size: dict[int, int] = {}
-    stack: list[tuple[yaml.Node, bool]] = [(root, False)]
-    while stack:
-        node, expanded = stack.pop()
-        children = _children(node)
-        if expanded:
-            size[id(node)] = min(1 + sum(size.get(id(child), 1) for child in children), MAX_NODES + 1)
-        elif id(node) not in size:
-            stack.append((node, True))
-            stack.extend((child, False) for child in children if id(child) not in size)
-    return size[id(root)]
+    return fold(root, _children, lambda node, sizes: min(1 + sum(sizes), MAX_NODES + 1))
 
 
 def _children(node: yaml.Node) -> list[yaml.Node]:

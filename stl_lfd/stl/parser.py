@@ -14,6 +14,7 @@ from pathlib import Path
 from lark import Lark, Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
+from stl_lfd.dag import fold
 from stl_lfd.errors import SpecError, StlNameError, StlSyntaxError, caret_context
 from stl_lfd.files import UnreadableFile, read_text
 from stl_lfd.stl import ast
@@ -95,17 +96,14 @@ def nesting_depth(spec: ast.Spec) -> int:
     """How deeply the specification's formula nests operators once its names are inlined,
     counted without recursion (names must not be recursive: see `_check_names`)."""
     definitions = {definition.name: definition.formula for definition in spec.definitions}
-    depth: dict[int, int] = {}
-    stack: list[tuple[ast.Node, bool]] = [(spec.formula, False)]
-    while stack:
-        node, expanded = stack.pop()
-        below = [definitions[node.name]] if isinstance(node, ast.Ref) else list(node.children())
-        if expanded:
-            depth[id(node)] = (0 if isinstance(node, ast.Ref) else 1) + max((depth[id(child)] for child in below), default=0)
-        elif id(node) not in depth:
-            stack.append((node, True))
-            stack.extend((child, False) for child in below if id(child) not in depth)
-    return depth[id(spec.formula)]
+
+    def below(node: ast.Node) -> tuple[ast.Node, ...]:
+        return (definitions[node.name],) if isinstance(node, ast.Ref) else node.children()
+
+    def depth(node: ast.Node, depths: list[int]) -> int:
+        return (0 if isinstance(node, ast.Ref) else 1) + max(depths, default=0)
+
+    return fold(spec.formula, below, depth)
 
 
 def _parse_checked(text: str, source: str, base_dir: Path, including: tuple[Path, ...]) -> ast.Spec:
