@@ -287,7 +287,7 @@ def _whole_seconds(advance):
 def _check_duration_and_rate(duration: Optional[float], rate: float) -> None:
     from stl_lfd.limits import samples_problem
 
-    problem = samples_problem(duration if duration is not None else 1.0, rate)
+    problem = samples_problem(duration, rate)
     if problem:
         raise ModelError(f"--duration/--rate: {problem}")
 
@@ -315,7 +315,6 @@ def replay(
         stlopt replay runs/phi1 --trial best --video best.mp4
         stlopt replay three_regions.npz --spec specs/phi1.stl --gui
     """
-    import os
 
     from stl_lfd.report.replay import ReplayRequest, replay_skill
 

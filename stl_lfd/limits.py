@@ -16,15 +16,16 @@ MAX_SEED = 2**32 - 1  # what numpy and torch accept
 MAX_STATES = 200  # HSMM states
 
 
-def samples_problem(duration: float, rate: float) -> str:
-    """Why a trajectory of `duration` seconds at `rate` samples per second is refused, or ''."""
-    if not math.isfinite(duration) or duration <= 0:
+def samples_problem(duration: float | None, rate: float) -> str:
+    """Why a trajectory of `duration` seconds (None: not known yet, only the rate is checked) at
+    `rate` samples per second is refused, or ''."""
+    if duration is not None and (not math.isfinite(duration) or duration <= 0):
         return f"the duration must be a positive number of seconds (got {duration:g})"
     if not math.isfinite(rate) or rate <= 0:
         return f"the rate must be a positive number of samples per second (got {rate:g})"
     if rate > MAX_RATE:
         return f"the rate {rate:g} samples/s is above the limit of {MAX_RATE:g} samples/s"
-    samples = duration * rate
+    samples = (duration or 0.0) * rate
     if samples > MAX_SAMPLES:
         return f"{duration:g} s at {rate:g} samples/s is {samples:.3g} samples, above the limit of {MAX_SAMPLES:,} per trajectory"
     return ""
