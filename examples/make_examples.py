@@ -44,8 +44,16 @@ def three_regions() -> SignalTable:
     centre = {name: np.array([np.mean(box[axis]) for axis in "xyz"]) for name, box in boxes.items()}
     start, end = np.array([0.45, 0.0, 0.40]), np.array([0.62, 0.06, 0.40])
     waypoints = [
-        (0.0, start), (1.0, start), (3.5, centre["L1"]), (5.0, centre["L1"]), (8.5, centre["L2"]),
-        (10.5, centre["L2"]), (14.5, centre["L3"]), (16.0, centre["L3"]), (18.5, end), (20.0, end),
+        (0.0, start),
+        (1.0, start),
+        (3.5, centre["L1"]),
+        (5.0, centre["L1"]),
+        (8.5, centre["L2"]),
+        (10.5, centre["L2"]),
+        (14.5, centre["L3"]),
+        (16.0, centre["L3"]),
+        (18.5, end),
+        (20.0, end),
     ]
     times = np.round(np.arange(0, 20 * RATE_HZ + 1) / RATE_HZ, 10)
     path = minimum_jerk(times, waypoints)

@@ -3,6 +3,6 @@ the command line builds its choices from them. A leaf module (no imports), so th
 --help` loads nothing heavy."""
 
 SEMANTICS = ("classic", "new")  # space robustness; the robustness of Varnai & Dimarogonas
-BACKENDS = ("pybullet", "kinematic")  # a simulated Panda; the reference itself
+BACKENDS = ("pybullet", "kinematic", "command")  # a simulated Panda; the reference itself; an external program
 METHODS = ("stl", "pi", "logei", "random")  # optimiser methods (stl is the default)
 RECORDED_SIGNALS = ("x", "y", "z", "gripper", "force")  # what every rollout records

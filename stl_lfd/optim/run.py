@@ -10,15 +10,16 @@ from typing import Any, Callable
 
 import numpy as np
 
-from stl_lfd.errors import ConfigError, RunError, SpecError
+from stl_lfd.errors import ConfigError, ExecutionError, RunError, SignalError, SpecError
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
 from stl_lfd.optim.loop import Outcome, Trial, best_trial, run_trials
 from stl_lfd.optim.resume import check_resume, inputs_record
-from stl_lfd.optim.rundir import RunDirectory, check_new_run_path
+from stl_lfd.optim.rundir import RunDirectory, StagedRun, check_new_run_path
 from stl_lfd.optim.space import SearchSpace, build_search_space
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import SINGLE_SKILL, Task
-from stl_lfd.sim import RECORDED_SIGNALS, Scene, execute, load_scene, new_backend
+from stl_lfd.signals import SignalTable
+from stl_lfd.sim import RECORDED_SIGNALS, Backend, CommandBackend, Reference, Scene, execute, load_scene, new_backend
 from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
 from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
 
@@ -26,21 +27,44 @@ from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
 class SkillObjective:
     """x -> adapted models -> (behaviour) reference -> rollout -> robustness of the recorded
     signals and of the spec's top-level parts (payload: the signals). It owns its backend (one
-    simulated world for all its rollouts) until `close`."""
+    simulated world for all its rollouts) until `close`; without a backend (`execute=False` in
+    `objective_for`) it only scores signals recorded elsewhere."""
 
-    def __init__(self, models: dict[str, HSMM], space: SearchSpace, task: Task, behaviour: Behaviour | None, scene: Scene, parts: SpecParts) -> None:
+    def __init__(
+        self, models: dict[str, HSMM], space: SearchSpace, task: Task, behaviour: Behaviour | None, scene: Scene, parts: SpecParts, backend: Backend | None
+    ) -> None:
         self.models, self.space, self.task, self.behaviour, self.scene, self.parts = models, space, task, behaviour, scene, parts
-        self.backend = new_backend(task.backend)
+        self.backend = backend
 
     def close(self) -> None:
-        self.backend.close()
+        if self.backend is not None:
+            self.backend.close()
 
-    def __call__(self, x: np.ndarray) -> Outcome:
-        return self.evaluate(self.space.apply(self.models, x))
+    def exchange_in(self, folder: Path) -> None:
+        """Write the command backend's exchange folders in `folder` (the run directory)."""
+        if isinstance(self.backend, CommandBackend):
+            self.backend.folder = Path(folder)
 
-    def evaluate(self, models: dict[str, HSMM]) -> Outcome:
-        reference = reference_for(models, self.behaviour, self.scene.gripper_opening, self.task.duration)
-        signals = execute(reference, self.scene, self.backend, self.task.rate).signals
+    def __call__(self, x: np.ndarray, trial: int = 0) -> Outcome:
+        return self.evaluate(self.space.apply(self.models, x), trial)
+
+    def reference(self, models: dict[str, HSMM]) -> Reference:
+        """What executing `models` means: the behaviour's (or single skill's) reference."""
+        return reference_for(models, self.behaviour, self.scene.gripper_opening, self.task.duration)
+
+    def evaluate(self, models: dict[str, HSMM], trial: int = 0) -> Outcome:
+        """Execute `models` as trial `trial` (0: the unoptimised skill) and score the signals."""
+        if self.backend is None:
+            raise ExecutionError("this objective only scores signals recorded elsewhere (it has no backend)")
+        if isinstance(self.backend, CommandBackend):
+            self.backend.trial = trial
+        return self.score(execute(self.reference(models), self.scene, self.backend, self.task.rate).signals)
+
+    def score(self, signals: SignalTable) -> Outcome:
+        """The robustness of recorded `signals`, and of each of the spec's parts."""
+        missing = sorted(self.parts.signals - set(signals.columns))
+        if missing:
+            raise SignalError(f"{signals.source}: no column {', '.join(missing)}, which the spec needs")
         # The spec is evaluated once, part by part; composing the parts is exactly its robustness.
         values = self.parts(signals.columns, signals.times)
         return Outcome(self.parts.compose(values), signals, dict(zip(self.parts.names, values.tolist())))
@@ -77,10 +101,11 @@ def task_models(task: Task) -> dict[str, HSMM]:
     return {SINGLE_SKILL: load_model(task.model)}
 
 
-def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = None) -> tuple[SearchSpace, SkillObjective]:
+def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = None, execute: bool = True) -> tuple[SearchSpace, SkillObjective]:
     """The parameter space and the objective of `task` (with `spec` instead of reading
-    `task.spec` when given); spec problems are found here, before any trial: unknown signals,
-    and windows that reach past the rollout duration."""
+    `task.spec` when given; with a backend of its own unless not `execute`); spec problems are
+    found here, before any trial: unknown signals, and windows that reach past the rollout
+    duration."""
     space = build_search_space(models, task.parameters, task.source)
     spec = load_spec(task.spec) if spec is None else spec
     parts = split_spec(spec, task.semantics, task.nu, source=str(task.spec))
@@ -91,11 +116,12 @@ def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = N
             f"{task.duration:g} s ('duration'); lengthen the rollouts or shorten the spec's windows"
         )
     recorded = set(RECORDED_SIGNALS)
-    unknown = sorted(set().union(*(function.signals for function in parts.functions)) - recorded)
+    unknown = sorted(parts.signals - recorded)
     if unknown:
         raise SpecError(f"signal {', '.join(unknown)} is not recorded by rollouts (they record {', '.join(sorted(recorded))})", str(task.spec))
     behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None
-    return space, SkillObjective(models, space, task, behaviour, load_scene(task.scene), parts)
+    backend = new_backend(task.backend, task.command) if execute else None
+    return space, SkillObjective(models, space, task, behaviour, load_scene(task.scene), parts, backend)
 
 
 def prepare_objective(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = None) -> tuple[SearchSpace, SkillObjective, Outcome, Summary]:
@@ -120,10 +146,15 @@ def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lam
     if task.model is None:
         learn_progress(f"learning the skills of {task.source.name}")
     models = task_models(task)
-    space, objective, initial, summary = prepare_objective(task, models)
+    space, objective = objective_for(task, models)
     try:
-        inputs = inputs if inputs is not None else inputs_record(task, {}, task)
-        run = RunDirectory.create(out, task, models, initial.payload, summary, inputs)
+        with StagedRun(out) as staged:
+            objective.exchange_in(staged.path)  # the unoptimised skill's execution is part of the new run
+            start = time.perf_counter()
+            initial = objective.evaluate(models, trial=0)
+            summary = Summary.of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
+            run = staged.commit(task, models, initial.payload, summary, inputs if inputs is not None else inputs_record(task, {}, task))
+        objective.exchange_in(run.path)
     except BaseException:
         objective.close()
         raise
@@ -148,8 +179,12 @@ def _reopen(run: RunDirectory, out: Path, trials: int | None, file_task: Task | 
         check_resume(Path(out), task, run.inputs(), file_task, given)
     if trials is not None:
         task = task.with_overrides(trials=trials)
+    pending = run.pending()
+    if pending is not None:
+        raise RunError(f"{out}: trial {pending.trial} was handed out by stlopt ask and is not told yet; tell its signals first (stlopt tell {out} SIGNALS.csv)")
     models = run.models()
     space, objective = objective_for(task, models)
+    objective.exchange_in(run.path)
     history = run.trials()
     if any(len(trial.x) != space.dimension for trial in history):
         raise RunError(f"{run.path / 'trials.jsonl'}: damaged (the recorded points do not have the task's {space.dimension} parameters)")
@@ -157,31 +192,53 @@ def _reopen(run: RunDirectory, out: Path, trials: int | None, file_task: Task | 
     return PreparedRun(task, run, models, space, objective, history, summary)
 
 
-def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None) -> Summary:
-    """Run the remaining trials, recording each; returns the final summary."""
-    run, space, task = prepared.run, prepared.space, prepared.task
-    previous_seconds = prepared.summary.wall_seconds
-    initial_robustness = prepared.summary.initial_robustness
-    initial_components = prepared.summary.initial_components
-    start = time.perf_counter()
-    best = best_trial(prepared.history)
+class Recorder:
+    """Records each finished trial of a run: its line and signals, the best models when it
+    improves on the best so far, and the summary."""
 
-    def record(trial: Trial, signals: Any) -> None:
-        nonlocal best
+    def __init__(self, prepared: PreparedRun) -> None:
+        self.prepared = prepared
+        self.history = list(prepared.history)
+        self.best = best_trial(self.history)
+        self.wall_seconds = prepared.summary.wall_seconds
+        if self.best is not None and not prepared.run.has_best_models():
+            prepared.run.write_best_models(prepared.space.apply(prepared.models, self.best.x))
+
+    def record(self, trial: Trial, signals: Any, seconds: float) -> None:
+        """Record `trial` (its `signals` may be None), which took `seconds` of wall time."""
+        run, space = self.prepared.run, self.prepared.space
         trial.parameters = space.as_dict(trial.x)
         run.append_trial(trial, signals)
-        improved = trial.robustness is not None and (best is None or trial.robustness > best.robustness)
-        if improved:
-            best = trial
-            run.write_best_models(space.apply(prepared.models, trial.x))
-        history.append(trial)
-        run.write_summary(Summary.of(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components))
-        on_trial(trial, best)
+        if trial.robustness is not None and (self.best is None or trial.robustness > self.best.robustness):
+            self.best = trial
+            run.write_best_models(space.apply(self.prepared.models, trial.x))
+        self.history.append(trial)
+        self.wall_seconds += seconds
+        run.write_summary(self.summary())
 
-    history = list(prepared.history)
-    if best is not None and not run.has_best_models():
-        run.write_best_models(space.apply(prepared.models, best.x))
-    run_trials(prepared.objective, space.bounds, task.optimizer, prepared.history, record, prepared.objective.parts)
-    summary = Summary.of(task, space, initial_robustness, history, previous_seconds + time.perf_counter() - start, initial_components)
-    run.write_summary(summary)
+    def summary(self) -> Summary:
+        prepared = self.prepared
+        initial = prepared.summary
+        return Summary.of(prepared.task, prepared.space, initial.initial_robustness, self.history, self.wall_seconds, initial.initial_components)
+
+
+def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None) -> Summary:
+    """Run the remaining trials, recording each; returns the final summary."""
+    recorder = Recorder(prepared)
+    mark = time.perf_counter()
+
+    def record(trial: Trial, signals: Any) -> None:
+        nonlocal mark
+        now = time.perf_counter()
+        recorder.record(trial, signals, now - mark)
+        mark = now
+        on_trial(trial, recorder.best)
+
+    def objective(x: np.ndarray) -> Outcome:
+        return prepared.objective(x, trial=len(recorder.history) + 1)
+
+    run_trials(objective, prepared.space.bounds, prepared.task.optimizer, prepared.history, record, prepared.objective.parts)
+    recorder.wall_seconds += time.perf_counter() - mark
+    summary = recorder.summary()
+    prepared.run.write_summary(summary)
     return summary

@@ -11,6 +11,10 @@ runs/<name>/
   summary.json         initial and best robustness, best trial, counts, wall time
   inputs.json          the task file's own settings, the command-line overrides, and a
                        fingerprint of the files a resume reads (spec, behaviour, scene)
+  executions/          with the command backend or ask/tell: per execution (initial/,
+                       trial-NNNN/) the reference handed out, the signals that came back,
+                       and the executor's stdout and stderr
+  pending.json         the trial handed out by `stlopt ask` and not told yet
   .lock                held (advisory lock) by the process writing the run; names its PID
 ```
 
@@ -51,6 +55,7 @@ TRIALS_FILE = "trials.jsonl"
 SUMMARY_FILE = "summary.json"
 SIGNALS_DIR = "signals"
 INPUTS_FILE = "inputs.json"
+PENDING_FILE = "pending.json"
 LOCK_FILE = ".lock"
 
 
@@ -67,36 +72,8 @@ class RunDirectory:
     ) -> "RunDirectory":
         """Write a new run directory in one step (built beside it, then renamed into place),
         locked for writing by this process."""
-        path = Path(path)
-        check_new_run_path(path)
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
-        except OSError as error:
-            raise OutputError(f"{path}: cannot create the run directory ({error.strerror or error})") from None
-        lock = None
-        try:
-            staging.chmod(folder_mode())  # mkdtemp makes it private; a run folder is an ordinary one
-            lock = RunLock.acquire(staging, path)
-            run = cls(staging)
-            write_atomically(staging / TASK_FILE, yaml.safe_dump(task.to_yaml_dict(), sort_keys=False))
-            if inputs is not None:
-                write_atomically(staging / INPUTS_FILE, json.dumps(inputs, indent=2) + "\n")
-            for skill, model in models.items():
-                save_model(model, staging / _model_file(MODEL_FILE, skill))
-            (staging / SIGNALS_DIR).mkdir()
-            write_signal_csv(initial_signals, staging / SIGNALS_DIR / "initial.csv")
-            (staging / TRIALS_FILE).touch()
-            run.write_summary(summary)
-            if path.exists():
-                path.rmdir()
-            os.replace(staging, path)
-        except BaseException:
-            if lock is not None:
-                lock.release()
-            shutil.rmtree(staging, ignore_errors=True)
-            raise
-        return cls(path, lock)
+        with StagedRun(path) as staged:
+            return staged.commit(task, models, initial_signals, summary, inputs)
 
     @classmethod
     def open(cls, path: Path, for_writing: bool = False) -> "RunDirectory":
@@ -105,7 +82,8 @@ class RunDirectory:
         path = Path(path)
         if not path.is_dir():
             raise RunError(f"{path}: no such run directory" if not path.exists() else f"{path}: is a file, not a run directory")
-        for name in (TASK_FILE, TRIALS_FILE, SUMMARY_FILE):
+        awaiting_initial = not (path / SUMMARY_FILE).exists() and (path / PENDING_FILE).is_file()
+        for name in (TASK_FILE, TRIALS_FILE) + (() if awaiting_initial else (SUMMARY_FILE,)):
             if not (path / name).is_file():
                 raise RunError(f"{path}: not a run directory of stlopt optimize, or a damaged one (no {name})")
         if not list(path.glob("model*.npz")):
@@ -145,6 +123,8 @@ class RunDirectory:
 
     def summary(self) -> Summary:
         path = self.path / SUMMARY_FILE
+        if not path.exists() and (self.path / PENDING_FILE).is_file():
+            raise RunError(f"{self.path}: the run waits for the signals of its unoptimised skill (stlopt tell {self.path} SIGNALS.csv)")
         try:
             data = json.loads(path.read_text())
         except (OSError, UnicodeDecodeError) as error:
@@ -195,6 +175,29 @@ class RunDirectory:
             stream.flush()
             os.fsync(stream.fileno())
 
+    def pending(self) -> "Pending | None":
+        """The trial handed out by `stlopt ask` and not told yet, if any."""
+        path = self.path / PENDING_FILE
+        if not path.exists():
+            return None
+        try:
+            data = json.loads(path.read_text())
+            pending = Pending(int(data["trial"]), str(data["phase"]), None if data["x"] is None else np.array(data["x"], dtype=float),
+                              float(data["optimizer_seconds"]), float(data["asked"]))  # fmt: skip
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
+            raise RunError(f"{path}: damaged ({getattr(error, 'msg', error)}); delete it to ask again") from None
+        if pending.trial < 0 or (pending.x is None) != (pending.trial == 0):
+            raise RunError(f"{path}: damaged (trial {pending.trial}); delete it to ask again")
+        return pending
+
+    def write_pending(self, pending: "Pending") -> None:
+        data = {"trial": pending.trial, "phase": pending.phase, "x": None if pending.x is None else [float(value) for value in pending.x],
+                "optimizer_seconds": pending.optimizer_seconds, "asked": pending.asked}  # fmt: skip
+        write_atomically(self.path / PENDING_FILE, json.dumps(data, indent=2) + "\n")
+
+    def clear_pending(self) -> None:
+        (self.path / PENDING_FILE).unlink(missing_ok=True)
+
     def signals_path(self, trial: int) -> Path:
         return self.path / SIGNALS_DIR / (f"trial-{trial:04d}.csv" if trial > 0 else "initial.csv")
 
@@ -212,6 +215,94 @@ class RunDirectory:
 def _model_file(base: str, skill: str) -> str:
     """`model.npz` for the single skill, `model-NAME.npz` for a skill of a behaviour."""
     return base if skill == SINGLE_SKILL else base.replace(".npz", f"-{skill}.npz")
+
+
+@dataclass(frozen=True)
+class Pending:
+    """A trial handed out by `stlopt ask`, waiting for its signals (`pending.json`).
+
+    Attributes:
+        trial: its number (0: the unoptimised skill).
+        phase: what chose it (`sobol`, `stl`, ...; `initial` for trial 0).
+        x: its point (None for trial 0).
+        optimizer_seconds: time spent choosing it.
+        asked: when it was handed out (seconds since the epoch).
+    """
+
+    trial: int
+    phase: str
+    x: np.ndarray | None
+    optimizer_seconds: float
+    asked: float
+
+
+class StagedRun:
+    """A run directory being built under a temporary name beside `path`, locked by this process.
+    `commit` writes its files and renames it into place; leaving the `with` block without a
+    commit removes it, so a run directory appears complete or not at all.
+
+    Attributes:
+        path: the temporary folder (where work done before the commit, such as the exchange
+            folder of the unoptimised skill's execution, is written).
+    """
+
+    def __init__(self, destination: Path) -> None:
+        self.destination = Path(destination)
+        check_new_run_path(self.destination)
+        try:
+            self.destination.parent.mkdir(parents=True, exist_ok=True)
+            self.path = Path(tempfile.mkdtemp(prefix=f".{self.destination.name}.", dir=self.destination.parent))
+        except OSError as error:
+            raise OutputError(f"{self.destination}: cannot create the run directory ({error.strerror or error})") from None
+        self.committed = False
+        try:
+            self.path.chmod(folder_mode())  # mkdtemp makes it private; a run folder is an ordinary one
+            self.lock: RunLock | None = RunLock.acquire(self.path, self.destination)
+        except BaseException:
+            shutil.rmtree(self.path, ignore_errors=True)
+            raise
+
+    def commit(
+        self,
+        task: Task,
+        models: dict[str, HSMM],
+        initial_signals: SignalTable | None,
+        summary: Summary | None,
+        inputs: dict[str, Any] | None = None,
+        pending: Pending | None = None,
+    ) -> "RunDirectory":
+        """Write the run's files and rename it into place. A run created by `stlopt ask` has no
+        initial signals and summary yet, but the `pending` unoptimised skill."""
+        staging = self.path
+        run = RunDirectory(staging)
+        write_atomically(staging / TASK_FILE, yaml.safe_dump(task.to_yaml_dict(), sort_keys=False))
+        if inputs is not None:
+            write_atomically(staging / INPUTS_FILE, json.dumps(inputs, indent=2) + "\n")
+        for skill, model in models.items():
+            save_model(model, staging / _model_file(MODEL_FILE, skill))
+        (staging / SIGNALS_DIR).mkdir()
+        if initial_signals is not None:
+            write_signal_csv(initial_signals, staging / SIGNALS_DIR / "initial.csv")
+        (staging / TRIALS_FILE).touch()
+        if summary is not None:
+            run.write_summary(summary)
+        if pending is not None:
+            run.write_pending(pending)
+        if self.destination.exists():
+            self.destination.rmdir()
+        os.replace(staging, self.destination)
+        self.committed = True
+        lock, self.lock = self.lock, None
+        return RunDirectory(self.destination, lock)
+
+    def __enter__(self) -> "StagedRun":
+        return self
+
+    def __exit__(self, *exception: object) -> None:
+        if not self.committed:
+            if self.lock is not None:
+                self.lock.release()
+            shutil.rmtree(self.path, ignore_errors=True)
 
 
 class RunLock:

@@ -15,6 +15,7 @@ from typing import Any, Iterator
 from stl_lfd.choices import BACKENDS, METHODS, SEMANTICS
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_SEED, MAX_STATES, MAX_TRIALS, samples_problem
+from stl_lfd.sim.command import DEFAULT_TIMEOUT, Command
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
 SINGLE_SKILL = "skill"  # the name of the one skill of a task without a behaviour
@@ -129,9 +130,14 @@ class Task:
     parameters: dict[str, Parameters]
     optimizer: Optimizer
     source: Path
+    command: Command | None = None
+
+    def __post_init__(self) -> None:
+        if self.backend == "command" and self.command is None:
+            raise ConfigError(f"{self.source}: the command backend needs the command that executes a trial ('command' in the task file, or --command)")
 
     def with_overrides(self, **changes: Any) -> "Task":
-        """A copy with command-line overrides (`spec`, `backend`, `seed`, `initial`, `trials`, `method`)."""
+        """A copy with command-line overrides (`spec`, `backend`, `command`, `seed`, `initial`, `trials`, `method`)."""
         optimizer_keys = {"seed", "initial", "trials", "method"}
         with _located(self.source):
             optimizer = replace(self.optimizer, **{k: v for k, v in changes.items() if k in optimizer_keys and v is not None})
@@ -148,6 +154,11 @@ class Task:
             data["demos"] = str(self.demos.resolve())
             data["states"] = self.states
         data.update(scene=self.scene, backend=self.backend, semantics=self.semantics, nu=self.nu, duration=self.duration, rate=self.rate)
+        if self.command is not None:
+            command = self.command
+            data["command"] = {"run": command.run[0] if command.shell else list(command.run), "timeout": command.timeout, "shell": command.shell}
+            if command.cwd is not None:
+                data["command"]["cwd"] = str(command.cwd.resolve())
         blocks = {name: _parameters_to_yaml(parameters) for name, parameters in self.parameters.items()}
         data["parameters"] = blocks[SINGLE_SKILL] if self.behaviour is None else blocks
         opt = self.optimizer
@@ -155,7 +166,23 @@ class Task:
         return data
 
 
-TOP_KEYS = ("name", "spec", "model", "demos", "behaviour", "states", "scene", "backend", "semantics", "nu", "duration", "rate", "parameters", "optimizer")
+TOP_KEYS = (
+    "name",
+    "spec",
+    "model",
+    "demos",
+    "behaviour",
+    "states",
+    "scene",
+    "backend",
+    "command",
+    "semantics",
+    "nu",
+    "duration",
+    "rate",
+    "parameters",
+    "optimizer",
+)
 
 
 def _parameters_to_yaml(parameters: Parameters) -> dict[str, Any]:
@@ -198,6 +225,7 @@ def load_task(path: str | Path) -> Task:
         parameters=_skill_parameters(data.get("parameters", {}), path, behaviour),
         optimizer=_optimizer(data.get("optimizer", {}), path),
         source=path,
+        command=_command(data["command"], path) if "command" in data else None,
     )
     problem = samples_problem(task.duration, task.rate)
     if problem:
@@ -262,6 +290,24 @@ def _parameters(data: Any, path: Path, where: str) -> Parameters:
         raise ConfigError(f"{path}: '{where}' selects nothing to optimise")
     with _located(path):
         return Parameters(means, durations, transitions)
+
+
+def _command(data: Any, path: Path) -> Command:
+    """`command: "..."`, or a block with `run` (a string or an argument list), `timeout`,
+    `shell` and `cwd` (default: the task file's folder, where relative paths in it start)."""
+    if isinstance(data, (str, list)):
+        data = {"run": data}
+    item = check_keys(data, ("run", "timeout", "shell", "cwd"), path, "command", required=("run",))
+    run = item["run"]
+    if not (isinstance(run, str) or (isinstance(run, list) and all(isinstance(argument, (str, int, float)) for argument in run))):
+        raise ConfigError(f"{path}: 'command.run' must be a command line or a list of arguments (got {shown(run)})")
+    shell = item.get("shell", False)
+    if not isinstance(shell, bool):
+        raise ConfigError(f"{path}: 'command.shell' must be true or false")
+    cwd = _existing(path.parent, item["cwd"], path, "command.cwd") if "cwd" in item else path.parent
+    timeout = number(item.get("timeout", DEFAULT_TIMEOUT), path, "command.timeout", positive=True)
+    with _located(path):
+        return Command.parse(run, timeout, shell, cwd.resolve())
 
 
 def _optimizer(data: Any, path: Path) -> Optimizer:

@@ -4,7 +4,9 @@ One interface, `execute(reference, scene, backend)`, returns the recorded signal
 execution as a `Rollout`. Backends:
 
 - `kinematic`: the reference itself is the signal (instant, for tests and quick studies);
-- `pybullet`: a simulated Franka Panda tracking the reference (see `stl_lfd.sim.panda`).
+- `pybullet`: a simulated Franka Panda tracking the reference (see `stl_lfd.sim.panda`);
+- `command`: an external program executes it, e.g. on a real robot (see `stl_lfd.sim.command`),
+  after the safety gate (`stl_lfd.sim.safety`) has checked it against the scene's limits.
 
 This package reads no STL and no skill model: callers turn a model into a `Reference` and
 pass the regions to draw through `Scene.with_regions`.
@@ -12,12 +14,24 @@ pass the regions to draw through `Scene.with_regions`.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Callable, Protocol
 
 from stl_lfd.choices import BACKENDS, RECORDED_SIGNALS
-from stl_lfd.errors import ExecutionError
+from stl_lfd.errors import ConfigError, ExecutionError
+from stl_lfd.sim.command import Command, CommandBackend, exchange_folder
 from stl_lfd.sim.kinematic import KinematicBackend
-from stl_lfd.sim.reference import SIMULATION_RATE, TIME_STEP, Reference, Rollout, TrackingWarning, warn_if_untracked
+from stl_lfd.sim.reference import (
+    SIMULATION_RATE,
+    TIME_STEP,
+    Reference,
+    Rollout,
+    TrackingWarning,
+    read_reference_csv,
+    warn_if_untracked,
+    write_reference_csv,
+)
+from stl_lfd.sim.safety import Safety, UnsafeReference, check_reference
 from stl_lfd.sim.scene import Scene, builtin_scenes, load_scene
 
 
@@ -40,14 +54,21 @@ DEFAULT_RATE = 100.0
 _backends: dict[str, Backend] = {}
 
 
-def new_backend(name: str) -> Backend:
+def new_backend(name: str, command: Command | None = None, folder: Path | None = None) -> Backend:
     """A backend of the caller's own, to close when done; backends are context managers:
 
     with new_backend("pybullet") as backend:
         rollout = execute(reference, scene, backend)
+
+    The `command` backend needs its `command`, and writes its exchange folders in `folder` (a
+    run directory; default: temporary folders).
     """
     if name not in BACKENDS:
         raise ExecutionError(f"unknown backend '{name}' (choose from {', '.join(BACKENDS)})")
+    if name == "command":
+        if command is None:
+            raise ConfigError("the command backend needs a command (--command, or 'command' in the task file)")
+        return CommandBackend(command, folder)
     if name == "kinematic":
         return KinematicBackend()
     from stl_lfd.sim.panda import PyBulletBackend
@@ -90,14 +111,22 @@ __all__ = [
     "SIMULATION_RATE",
     "TIME_STEP",
     "Backend",
+    "Command",
+    "CommandBackend",
     "DEFAULT_RATE",
     "Reference",
     "Rollout",
+    "Safety",
     "Scene",
     "TrackingWarning",
+    "UnsafeReference",
     "builtin_scenes",
+    "check_reference",
+    "exchange_folder",
     "execute",
     "get_backend",
     "new_backend",
     "load_scene",
+    "read_reference_csv",
+    "write_reference_csv",
 ]

@@ -1,13 +1,25 @@
-"""What a backend executes (`Reference`) and what it returns (`Rollout`)."""
+"""What a backend executes (`Reference`) and what it returns (`Rollout`), and the reference CSV
+that carries a reference to an executor outside stlopt.
+
+Reference CSV: a header `t,x,y,z,gripper,skill,state,event` and one row per sample at the
+simulation rate (240 Hz): time (s, from 0), grasp-target position (m, robot base frame),
+finger opening (m), the skill (or action) the sample belongs to, its HSMM state (1-based, 0
+during an action), and `grasp` or `release` on the sample where that action starts (empty
+otherwise). Numbers are written so that they read back exactly.
+"""
 
 from __future__ import annotations
 
+import csv
+import io
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from stl_lfd.errors import ExecutionError
+from stl_lfd.errors import ExecutionError, SignalError
+from stl_lfd.files import UnreadableFile, read_text, write_atomically
 from stl_lfd.signals import SignalTable
 
 # The rate at which references are given and the simulator steps: PyBullet's default 240 Hz.
@@ -31,12 +43,16 @@ class Reference:
         gripper: `T` finger openings (m), or None to keep the scene's opening.
         events: `(time, action)` pairs, action `grasp` (take the movable object nearest the
             hand) or `release` (let it go).
+        skills: `T` names of the skill (or action) each sample belongs to, or None.
+        states: `T` HSMM states (1-based; 0 during an action) followed at each sample, or None.
     """
 
     times: np.ndarray
     positions: np.ndarray
     gripper: np.ndarray | None = None
     events: tuple[tuple[float, str], ...] = ()
+    skills: np.ndarray | None = None
+    states: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.times = np.asarray(self.times, dtype=float)
@@ -53,6 +69,10 @@ class Reference:
         _require_finite("x, y, z", self.positions, self.times)
         if self.gripper is not None:
             _require_finite("gripper", self.gripper[:, None], self.times)
+        for name in ("skills", "states"):
+            labels = getattr(self, name)
+            if labels is not None and np.shape(labels) != self.times.shape:
+                raise ExecutionError(f"reference: {name} must have one value per sample")
         if np.any(np.diff(self.times) <= 0):
             raise ExecutionError("reference: times must be strictly increasing")
         for time, action in self.events:
@@ -126,3 +146,59 @@ def warn_if_untracked(rollout: Rollout, reference: Reference, tolerance: float) 
         TrackingWarning,
         stacklevel=3,
     )
+
+
+REFERENCE_COLUMNS = ("t", "x", "y", "z", "gripper", "skill", "state", "event")
+
+
+def write_reference_csv(reference: Reference, path: Path, open_width: float) -> None:
+    """Write `reference` as a reference CSV (atomically); `open_width` fills the gripper column
+    of a reference that does not command the gripper."""
+    gripper = reference.gripper_at(reference.times, open_width)
+    skills = reference.skills if reference.skills is not None else np.full(reference.times.shape, "")
+    states = reference.states if reference.states is not None else np.zeros(reference.times.shape, dtype=int)
+    events = dict(reference.events)
+    starts = {int(np.argmin(np.abs(reference.times - time))): action for time, action in events.items()}
+    body = io.StringIO()
+    body.write(",".join(REFERENCE_COLUMNS) + "\n")
+    for index, time in enumerate(reference.times.tolist()):
+        x, y, z = reference.positions[index].tolist()
+        body.write(f"{time!r},{x!r},{y!r},{z!r},{float(gripper[index])!r},{skills[index]},{int(states[index])},{starts.get(index, '')}\n")
+    write_atomically(Path(path), body.getvalue())
+
+
+def read_reference_csv(path: str | Path) -> Reference:
+    """Read a reference CSV (what `stlopt ask` and the command backend hand to an executor).
+
+    Raises:
+        SignalError: naming the file and the line of a bad row.
+    """
+    shown = str(path)
+    try:
+        text = read_text(path, "reference CSV")
+    except UnreadableFile as error:
+        raise SignalError(f"{shown}: {error}") from None
+    rows = [row for row in csv.reader(io.StringIO(text)) if row]
+    if not rows or [name.strip() for name in rows[0]][:4] != ["t", "x", "y", "z"]:
+        raise SignalError(f"{shown}:1: not a reference CSV (expected the header {','.join(REFERENCE_COLUMNS)})")
+    header = [name.strip() for name in rows[0]]
+    index = {name: header.index(name) for name in REFERENCE_COLUMNS if name in header}
+    numbers, skills, states, events = [], [], [], []
+    for line, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise SignalError(f"{shown}:{line}: expected {len(header)} values, found {len(row)}")
+        try:
+            numbers.append([float(row[index[name]]) for name in ("t", "x", "y", "z", "gripper") if name in index])
+            states.append(int(row[index["state"]]) if "state" in index else 0)
+        except ValueError:
+            raise SignalError(f"{shown}:{line}: not a number where one is expected") from None
+        skills.append(row[index["skill"]] if "skill" in index else "")
+        if "event" in index and row[index["event"]].strip():
+            events.append((numbers[-1][0], row[index["event"]].strip()))
+    if len(numbers) < 2:
+        raise SignalError(f"{shown}: a reference needs at least two samples")
+    data = np.array(numbers)
+    try:
+        return Reference(data[:, 0], data[:, 1:4], data[:, 4] if "gripper" in index else None, tuple(events), np.array(skills), np.array(states))
+    except ExecutionError as error:
+        raise SignalError(f"{shown}: {str(error).removeprefix('reference: ')}") from None

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from stl_lfd.errors import ConfigError
+from stl_lfd.sim.safety import Safety
 from stl_lfd.yamlfile import check_keys, number, read_yaml, shown, vector
 
 SHAPES = ("box", "cylinder", "sphere")
@@ -87,6 +88,9 @@ class Scene:
         camera: the viewpoint of videos and of the GUI.
         objects: rigid bodies besides the robot and the floor.
         regions: boxes drawn for viewing.
+        safety: the workspace box and maximum speed every reference must respect before it
+            leaves stlopt (external command, `stlopt ask`); None when the scene declares none.
+        source: the built-in name or the absolute path the scene was loaded from.
     """
 
     name: str
@@ -99,6 +103,8 @@ class Scene:
     camera: Camera = field(default_factory=Camera)
     objects: tuple[SceneObject, ...] = ()
     regions: tuple[Region, ...] = ()
+    safety: Safety | None = None
+    source: str = field(default="", repr=False, compare=False)
 
     def with_regions(self, boxes: Mapping[str, Mapping[str, tuple[float, float]]]) -> "Scene":
         """A copy that also draws `boxes` (name -> {signal: (lo, hi)}); boxes need x, y and z."""
@@ -123,18 +129,20 @@ def load_scene(name_or_path: str | Path) -> Scene:
     text = str(name_or_path)
     if text in builtin_scenes():
         path = Path(str(resources.files("stl_lfd.sim") / "scenes" / f"{text}.yaml"))
+        source = text
     elif text.endswith((".yaml", ".yml")) or Path(text).is_file():
         path = Path(text)
         if not path.is_file():
             raise ConfigError(f"{path}: scene file not found")
+        source = str(path.resolve())
     else:
         raise ConfigError(f"unknown scene '{text}' (built-in: {', '.join(builtin_scenes())}; or the path of a scene .yaml file)")
-    return parse_scene(read_yaml(path), path)
+    return replace(parse_scene(read_yaml(path), path), source=source)
 
 
 def parse_scene(data: dict[str, Any], path: Path) -> Scene:
     """Validate the mapping read from a scene file."""
-    keys = ("description", "gripper_opening", "control", "force_filter_hz", "tracking_tolerance", "grasp_distance", "camera", "objects")
+    keys = ("description", "gripper_opening", "control", "force_filter_hz", "tracking_tolerance", "grasp_distance", "camera", "objects", "safety")
     check_keys(data, keys, path, required=("description",))
     scene = Scene(name=path.stem, description=str(data["description"]))
     if "gripper_opening" in data:
@@ -148,6 +156,8 @@ def parse_scene(data: dict[str, Any], path: Path) -> Scene:
         scene = replace(scene, control=_parse_control(data["control"], path))
     if "camera" in data:
         scene = replace(scene, camera=_parse_camera(data["camera"], path))
+    if "safety" in data:
+        scene = replace(scene, safety=_parse_safety(data["safety"], path))
     objects = data.get("objects") or []
     if not isinstance(objects, list):
         raise ConfigError(f"{path}: 'objects' must be a list")
@@ -184,6 +194,16 @@ def _parse_camera(data: Any, path: Path) -> Camera:
         if key in data:
             values[key] = int(number(data[key], path, f"camera.{key}", minimum=16))
     return Camera(**values)
+
+
+def _parse_safety(data: Any, path: Path) -> Safety:
+    check_keys(data, ("workspace", "max_speed"), path, "safety", required=("workspace", "max_speed"))
+    box = check_keys(data["workspace"], ("lower", "upper"), path, "safety.workspace", required=("lower", "upper"))
+    lower, upper = (vector(box[key], 3, path, f"safety.workspace.{key}") for key in ("lower", "upper"))
+    try:
+        return Safety(lower, upper, number(data["max_speed"], path, "safety.max_speed", positive=True))
+    except ValueError as error:
+        raise ConfigError(f"{path}: 'safety': {error}") from None
 
 
 def _parse_object(data: Any, path: Path, index: int) -> SceneObject:

@@ -106,31 +106,36 @@ def behaviour_reference(behaviour: Behaviour, models: dict[str, HSMM], open_widt
     `duration` seconds when given."""
     pieces: list[np.ndarray] = []
     grippers: list[np.ndarray] = []
+    skills: list[np.ndarray] = []
+    states: list[np.ndarray] = []
     events: list[tuple[float, str]] = []
     clock, closed = 0.0, False
     for step in behaviour.steps:
         if isinstance(step, SkillStep):
             model = models[step.name]
-            skill = reference_of(model, model.expected_duration() + step.settle)
-            positions = skill.positions
+            skill = reference_of(model, model.expected_duration() + step.settle, step.name)
+            positions, names, followed = skill.positions, skill.skills, skill.states
         else:
             events.append((clock, step.action))
             closed = step.action == "grasp"
             positions = np.repeat(pieces[-1][-1:] if pieces else _first_position(behaviour, models), _steps(step.seconds), axis=0)
+            names, followed = np.full(len(positions), step.action), np.zeros(len(positions), dtype=int)
         pieces.append(positions)
         grippers.append(np.full(len(positions), 0.0 if closed else open_width))
+        skills.append(names)
+        states.append(followed)
         clock += len(positions) * TIME_STEP
-    positions, gripper = np.concatenate(pieces), np.concatenate(grippers)
+    positions, gripper, names, followed = np.concatenate(pieces), np.concatenate(grippers), np.concatenate(skills), np.concatenate(states)
     if duration is not None:
         count = _steps(duration) + 1
-        if count > len(positions):
-            extra = count - len(positions)
-            positions = np.concatenate([positions, np.repeat(positions[-1:], extra, axis=0)])
-            gripper = np.concatenate([gripper, np.repeat(gripper[-1:], extra)])
-        positions, gripper = positions[:count], gripper[:count]
+        if count > len(positions):  # hold the last sample
+            positions, gripper, names, followed = (
+                np.concatenate([values, np.repeat(values[-1:], count - len(values), axis=0)]) for values in (positions, gripper, names, followed)
+            )
+        positions, gripper, names, followed = positions[:count], gripper[:count], names[:count], followed[:count]
     times = np.arange(len(positions)) * TIME_STEP
     kept = tuple((time, action) for time, action in events if time <= times[-1])
-    return Reference(times, positions, gripper, kept)
+    return Reference(times, positions, gripper, kept, names, followed)
 
 
 def _steps(seconds: float) -> int:

@@ -9,6 +9,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
+
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm import HSMM, retrieve
 from stl_lfd.sim import DEFAULT_RATE, SIMULATION_RATE, Backend, Reference, Rollout, Scene, execute, load_scene
@@ -16,15 +18,17 @@ from stl_lfd.sim import DEFAULT_RATE, SIMULATION_RATE, Backend, Reference, Rollo
 POSITION_SIGNALS = ("x", "y", "z")
 
 
-def reference_of(model: HSMM, duration: float | None = None) -> Reference:
-    """The model's retrieved trajectory at the simulation rate, as a reference to execute."""
+def reference_of(model: HSMM, duration: float | None = None, name: str = "skill") -> Reference:
+    """The model's retrieved trajectory at the simulation rate, as a reference to execute; its
+    samples are labelled with the skill's `name` and the (1-based) HSMM state they follow."""
     missing = [name for name in POSITION_SIGNALS if name not in model.signal_names_]
     if missing:
         raise ModelError(f"the model has no signal {', '.join(missing)}: only position skills (x, y, z) can be executed")
     trajectory = retrieve(model, duration, rate=SIMULATION_RATE)
     columns = [model.signal_names_.index(name) for name in POSITION_SIGNALS]
     gripper = trajectory.positions[:, model.signal_names_.index("gripper")] if "gripper" in model.signal_names_ else None
-    return Reference(trajectory.times, trajectory.positions[:, columns], gripper)
+    skills = np.full(trajectory.times.shape, name)
+    return Reference(trajectory.times, trajectory.positions[:, columns], gripper, skills=skills, states=trajectory.states + 1)
 
 
 def rollout_model(

@@ -40,6 +40,11 @@ class SpecParts:
     functions: tuple[Robustness, ...]
     semantics: Semantics
 
+    @property
+    def signals(self) -> frozenset[str]:
+        """The signal names the parts read."""
+        return frozenset().union(*(function.signals for function in self.functions))
+
     def __call__(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> np.ndarray:
         """`m` robustness values of the parts at the first sample (`B x m` for a batch)."""
         return np.stack([np.asarray(function(signals, times), dtype=float) for function in self.functions], axis=-1)

@@ -1,0 +1,242 @@
+"""The `command` backend: each execution is run by an external program, such as the user's
+controller stack on a real robot.
+
+For every execution, stlopt checks the reference against the scene's safety limits, writes it
+as a reference CSV into an exchange folder and runs the command, which must execute it and
+write the recorded signals as a signal CSV. In the run directory the exchange folders are
+`executions/initial/` (the unoptimised skill) and `executions/trial-NNNN/`, each holding
+`reference.csv`, `signals.csv` (written by the command), `stdout.txt` and `stderr.txt`.
+
+Placeholders in the command's arguments: `{reference}`, `{signals}` (the two paths), `{trial}`
+(0 for the unoptimised skill), `{run_dir}`, `{scene}` (built-in name or path) and `{rate}`
+(samples/s to record). The same values are in the environment as `STLOPT_REFERENCE`,
+`STLOPT_SIGNALS`, `STLOPT_TRIAL`, `STLOPT_RUN_DIR`, `STLOPT_SCENE` and `STLOPT_RATE`.
+
+The command runs without a shell (an argument list; a string is split as a shell would) unless
+`shell` is set, in its own process group, so that a timeout or Ctrl-C stops it with everything
+it started.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shlex
+import shutil
+import signal
+import subprocess
+import tempfile
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterator
+
+import numpy as np
+
+from stl_lfd.errors import ConfigError, ExecutionError, SignalError
+from stl_lfd.signals import SignalTable, read_signal_csv
+from stl_lfd.sim.reference import Reference, Rollout, write_reference_csv
+from stl_lfd.sim.safety import check_reference
+from stl_lfd.sim.scene import Scene
+
+DEFAULT_TIMEOUT = 600.0  # seconds: a real trial takes about a minute
+STOP_GRACE = 3.0  # seconds between SIGTERM and SIGKILL when a command is stopped
+PLACEHOLDERS = ("reference", "signals", "trial", "run_dir", "scene", "rate")
+EXECUTIONS_DIR = "executions"
+
+
+@dataclass(frozen=True)
+class Command:
+    """An executor command.
+
+    Attributes:
+        run: the argument list (with placeholders), or with `shell` one shell command line.
+        timeout: seconds after which the command is stopped and the execution fails.
+        shell: run `run[0]` with `/bin/sh -c` (placeholders are substituted quoted).
+        cwd: the working directory (default: the current one).
+    """
+
+    run: tuple[str, ...]
+    timeout: float = DEFAULT_TIMEOUT
+    shell: bool = False
+    cwd: Path | None = None
+
+    @classmethod
+    def parse(cls, text: str | list[str], timeout: float = DEFAULT_TIMEOUT, shell: bool = False, cwd: Path | None = None) -> "Command":
+        """A command from a string (split like a shell unless `shell`) or an argument list."""
+        if isinstance(text, list):
+            if shell:
+                raise ConfigError("a shell command must be one string, not a list")
+            run = tuple(str(item) for item in text)
+        else:
+            try:
+                run = (text,) if shell else tuple(shlex.split(text))
+            except ValueError as error:
+                raise ConfigError(f"the command {text!r} cannot be split into arguments ({error})") from None
+        if not run or not run[0].strip():
+            raise ConfigError("the command is empty")
+        if not timeout > 0:
+            raise ConfigError(f"the command's timeout must be positive (got {timeout})")
+        return cls(run, float(timeout), shell, cwd)
+
+    def arguments(self, values: dict[str, str]) -> list[str] | str:
+        """The command with its placeholders replaced by `values`."""
+        quote = shlex.quote if self.shell else str
+        arguments = []
+        for argument in self.run:
+            for name, value in values.items():
+                argument = argument.replace("{" + name + "}", quote(value))
+            arguments.append(argument)
+        return arguments[0] if self.shell else arguments
+
+    def shown(self) -> str:
+        return self.run[0] if self.shell else shlex.join(self.run)
+
+
+def exchange_folder(run_dir: Path, trial: int) -> Path:
+    """Where the files of trial `trial` (0: the unoptimised skill) are exchanged."""
+    return Path(run_dir) / EXECUTIONS_DIR / ("initial" if trial == 0 else f"trial-{trial:04d}")
+
+
+class CommandBackend:
+    """Executes references by running a `Command`.
+
+    Attributes:
+        folder: the run directory the exchange folders go in; None for a temporary folder,
+            removed after the execution.
+        trial: the trial number of the next execution (0: the unoptimised skill).
+    """
+
+    name = "command"
+
+    def __init__(self, command: Command, folder: Path | None = None) -> None:
+        self.command = command
+        self.folder = folder
+        self.trial = 0
+
+    def run(self, reference: Reference, scene: Scene, rate: float, observer: Callable | None = None) -> Rollout:
+        """Check `reference`, hand it to the command, and return the signals it recorded."""
+        if scene.safety is None:
+            raise ExecutionError(f"the scene {scene.name} declares no 'safety' (workspace and max_speed), which references need before they leave stlopt")
+        check_reference(reference, scene.safety)
+        with self._exchange() as folder:
+            reference_path, signals_path = folder / "reference.csv", folder / "signals.csv"
+            write_reference_csv(reference, reference_path, scene.gripper_opening)
+            written = _digest(reference_path)
+            signals_path.unlink(missing_ok=True)  # left by an execution that was interrupted
+            values = {
+                "reference": str(reference_path.resolve()), "signals": str(signals_path.resolve()), "trial": str(self.trial),
+                "run_dir": str(Path(self.folder).resolve()) if self.folder is not None else str(folder.resolve()),
+                "scene": scene.source or scene.name, "rate": f"{rate:g}",
+            }  # fmt: skip
+            run_command(self.command, values, folder)
+            if not reference_path.is_file() or _digest(reference_path) != written:
+                raise ExecutionError(f"{reference_path}: the command removed or changed the reference it was given")
+            if not signals_path.is_file():
+                raise ExecutionError(f"the command exited without writing {signals_path}{_last_words(folder)}")
+            signals = read_signal_csv(signals_path, required=("x", "y", "z"))
+            check_coverage(signals, reference.duration)
+        return Rollout(signals, tracking_error(signals, reference))
+
+    @contextmanager
+    def _exchange(self) -> Iterator[Path]:
+        if self.folder is not None:
+            folder = exchange_folder(self.folder, self.trial)
+            folder.mkdir(parents=True, exist_ok=True)
+            yield folder
+            return
+        folder = Path(tempfile.mkdtemp(prefix="stlopt-execution-"))
+        try:
+            yield folder
+        finally:
+            shutil.rmtree(folder, ignore_errors=True)
+
+    def close(self) -> None:
+        """Nothing to release: each execution's process has ended when `run` returns."""
+
+    def __enter__(self) -> "CommandBackend":
+        return self
+
+    def __exit__(self, *exception: object) -> None:
+        self.close()
+
+
+def run_command(command: Command, values: dict[str, str], folder: Path) -> None:
+    """Run `command` with `values` for its placeholders (and in its environment), its output in
+    `folder/stdout.txt` and `folder/stderr.txt`; stop its process group on timeout or Ctrl-C.
+
+    Raises:
+        ExecutionError: the command cannot start, fails, is killed or times out.
+    """
+    environment = dict(os.environ, **{f"STLOPT_{name.upper()}": value for name, value in values.items()})
+    with open(folder / "stdout.txt", "wb") as stdout, open(folder / "stderr.txt", "wb") as stderr:
+        try:
+            process = subprocess.Popen(
+                command.arguments(values), shell=command.shell, cwd=command.cwd, env=environment,
+                stdin=subprocess.DEVNULL, stdout=stdout, stderr=stderr, start_new_session=True,
+            )  # fmt: skip
+        except OSError as error:
+            raise ExecutionError(f"the command {command.shown()!r} cannot be started ({error.strerror or error})") from None
+        try:
+            status = process.wait(timeout=command.timeout)
+        except subprocess.TimeoutExpired:
+            stop_process_group(process)
+            raise ExecutionError(f"the command did not finish within its timeout of {command.timeout:g} s and was stopped{_last_words(folder)}") from None
+        except BaseException:  # Ctrl-C: nothing the command started may outlive us
+            stop_process_group(process)
+            raise
+    if status < 0:
+        raise ExecutionError(f"the command was killed by {signal.Signals(-status).name}{_last_words(folder)}")
+    if status != 0:
+        raise ExecutionError(f"the command exited with status {status}{_last_words(folder)}")
+
+
+def stop_process_group(process: subprocess.Popen) -> None:
+    """SIGTERM to the process's group, SIGKILL after `STOP_GRACE` seconds if still running."""
+    for stop, wait in ((signal.SIGTERM, STOP_GRACE), (signal.SIGKILL, None)):
+        try:
+            os.killpg(process.pid, stop)
+        except ProcessLookupError:
+            pass
+        try:
+            process.wait(timeout=wait)
+            break
+        except subprocess.TimeoutExpired:
+            continue
+    _reap_group(process.pid)
+
+
+def _reap_group(group: int) -> None:
+    """Kill what is left of the group (children that ignored SIGTERM after their parent died)."""
+    try:
+        os.killpg(group, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+
+
+def tracking_error(signals: SignalTable, reference: Reference) -> np.ndarray:
+    """Distance (m) between the recorded positions and the reference at the recorded times."""
+    recorded = np.column_stack([signals.columns[axis] for axis in ("x", "y", "z")])
+    return np.linalg.norm(recorded - reference.positions_at(signals.times), axis=1)
+
+
+def check_coverage(signals: SignalTable, duration: float) -> None:
+    """Signals from outside must start at 0 and last the whole rollout (to within a sample)."""
+    period = float(np.median(np.diff(signals.times))) if signals.samples > 1 else duration
+    if signals.samples < 2 or abs(signals.times[0]) > period or signals.times[-1] < duration - period - 1e-9:
+        covered = f"{signals.times[0]:g} to {signals.times[-1]:g} s" if signals.samples else "nothing"
+        raise SignalError(f"{signals.source}: the signals cover {covered}, but the rollout lasts 0 to {duration:g} s")
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _last_words(folder: Path) -> str:
+    """`: <the last line of its stderr> (folder/stderr.txt)`, or '' when it wrote nothing."""
+    path = folder / "stderr.txt"
+    try:
+        lines = [line.strip() for line in path.read_text(errors="replace").splitlines() if line.strip()]
+    except OSError:
+        return ""
+    return f": {lines[-1][:300]} (see {path})" if lines else f" (nothing on stderr: {path})"

@@ -1,0 +1,73 @@
+"""The safety gate: a reference must stay inside the scene's workspace box and below its maximum
+Cartesian speed before it is handed to anything outside stlopt (an external command, or a
+trial asked for with `stlopt ask`).
+
+The in-process backends are not gated: a simulated robot cannot be hurt, and the optimiser
+should learn from what it would do.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from stl_lfd.errors import ExecutionError
+from stl_lfd.sim.reference import Reference
+
+AXES = ("x", "y", "z")
+
+
+class UnsafeReference(ExecutionError):
+    """A reference leaves the workspace or moves faster than allowed; it was not executed."""
+
+
+@dataclass(frozen=True)
+class Safety:
+    """Limits every reference must respect.
+
+    Attributes:
+        lower, upper: corners (m, robot base frame) of the box every reference position lies in.
+        max_speed: the fastest Cartesian speed (m/s) a reference may ask for.
+    """
+
+    lower: tuple[float, float, float]
+    upper: tuple[float, float, float]
+    max_speed: float
+
+    def __post_init__(self) -> None:
+        if not all(low < high for low, high in zip(self.lower, self.upper)):
+            raise ValueError(f"the workspace's lower corner {list(self.lower)} must be below its upper corner {list(self.upper)} on every axis")
+        if not self.max_speed > 0:
+            raise ValueError(f"max_speed must be positive (got {self.max_speed})")
+
+
+def check_reference(reference: Reference, safety: Safety) -> None:
+    """Refuse a reference that leaves the workspace or is too fast.
+
+    Raises:
+        UnsafeReference: naming the first offending time and point.
+    """
+    positions, times = reference.positions, reference.times
+    lower, upper = np.array(safety.lower), np.array(safety.upper)
+    outside = np.any((positions < lower) | (positions > upper), axis=1)
+    if outside.any():
+        index = int(np.argmax(outside))
+        point = positions[index]
+        axis = int(np.argmax((point < lower) | (point > upper)))
+        bound = f"below {lower[axis]:g}" if point[axis] < lower[axis] else f"above {upper[axis]:g}"
+        raise UnsafeReference(
+            f"unsafe reference, not executed: at t = {times[index]:.3f} s it reaches {_point(point)}, outside the workspace ({AXES[axis]} {bound})"
+        )
+    speeds = np.linalg.norm(np.diff(positions, axis=0), axis=1) / np.diff(times)
+    too_fast = speeds > safety.max_speed
+    if too_fast.any():
+        index = int(np.argmax(too_fast))
+        raise UnsafeReference(
+            f"unsafe reference, not executed: at t = {times[index]:.3f} s it moves at {speeds[index]:.3f} m/s near {_point(positions[index])}, "
+            f"faster than the scene's max_speed of {safety.max_speed:g} m/s"
+        )
+
+
+def _point(point: np.ndarray) -> str:
+    return "(" + ", ".join(f"{name}={value:.3f}" for name, value in zip(AXES, point)) + ")"
