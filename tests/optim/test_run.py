@@ -141,11 +141,11 @@ def test_ctrl_c_keeps_the_finished_trials_and_says_how_to_resume(tmp_path, learn
     original = run_module.SkillObjective.__call__
     calls = []
 
-    def interrupt_on_third(self, x):
+    def interrupt_on_third(self, x, trial=0):
         calls.append(x)
         if len(calls) == 3:
             raise KeyboardInterrupt
-        return original(self, x)
+        return original(self, x, trial)
 
     monkeypatch.setattr(run_module.SkillObjective, "__call__", interrupt_on_third)
     result = runner.invoke(app, ["optimize", str(task), "--out", str(out)])
