@@ -7,6 +7,7 @@ the code of its class in `stl_lfd.errors`; usage errors exit 2.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import signal
@@ -21,7 +22,7 @@ import typer
 from typer.core import TyperArgument, TyperCommand
 
 from stl_lfd.choices import BACKENDS, METHODS, SEMANTICS
-from stl_lfd.errors import ExecutionError, ModelError, StlLfdError
+from stl_lfd.errors import ConfigError, ExecutionError, ModelError, StlLfdError
 
 
 class _PlainUsage(TyperCommand):
@@ -59,6 +60,8 @@ def _print_warning(message, category, filename, lineno, file=None, line=None) ->
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 SIGNAL_SUFFIXES = (".csv",)
 INTERRUPTED = 130  # what a shell reports for a process that SIGINT ended
+COMMAND_HELP = "With --backend command: the executor to run, with {reference} and {signals} for the two CSV paths (no shell)."
+COMMAND_TIMEOUT_HELP = "Seconds after which the executor is stopped and the trial fails (default: the task's, or 600)."
 
 
 @contextmanager
@@ -225,10 +228,14 @@ def retrieve(
 def rollout(
     model_file: Path = typer.Argument(..., metavar="MODEL_FILE", help="Model file written by 'stlopt learn'."),
     scene: str = typer.Option("free_space", help="Built-in scene name or a scene .yaml file."),
-    backend: BackendOption = typer.Option(BackendOption.pybullet, help="pybullet simulates a Panda; kinematic records the reference itself."),
+    backend: BackendOption = typer.Option(
+        BackendOption.pybullet, help="pybullet simulates a Panda; kinematic records the reference itself; command runs --command."
+    ),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="Signal CSV to write (default: stdout)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to execute (default: the model's expected duration)."),
     rate: float = typer.Option(100.0, "--rate", help="Recording rate in samples per second."),
+    command: Optional[str] = typer.Option(None, "--command", help=COMMAND_HELP),
+    command_timeout: Optional[float] = typer.Option(None, "--command-timeout", help=COMMAND_TIMEOUT_HELP),
 ) -> None:
     """Execute a skill model once and write the recorded signals (t,x,y,z,gripper,force).
 
@@ -249,15 +256,16 @@ def rollout(
         _check_duration_and_rate(duration, rate)
         if output is not None:
             check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
+        runner = _backend(backend.value, _command(command, command_timeout, None))
         model = load_model(model_file)
         world = load_scene(scene)
         start = time.perf_counter()
         simulated = duration if duration is not None else model.expected_duration()
         if backend is BackendOption.pybullet and simulated > LONG_ROLLOUT_SECONDS:
             with _progress_bar(f"simulating {simulated:.0f} s", int(simulated)) as advance:
-                result = rollout_model(model, world, backend.value, duration, rate, _whole_seconds(advance))
+                result = rollout_model(model, world, runner, duration, rate, _whole_seconds(advance))
         else:
-            result = rollout_model(model, world, backend.value, duration, rate)
+            result = rollout_model(model, world, runner, duration, rate)
         elapsed = time.perf_counter() - start
         write_signal_csv(result.signals, output if output is not None else sys.stdout)
     simulated = result.signals.duration
@@ -270,6 +278,31 @@ def rollout(
 
 
 LONG_ROLLOUT_SECONDS = 120.0  # simulated seconds from which a rollout shows a progress bar
+
+
+def _command(text: Optional[str], timeout: Optional[float], task_command):
+    """The executor command of --command/--command-timeout, None when neither is given."""
+    from stl_lfd.sim import Command
+    from stl_lfd.sim.command import DEFAULT_TIMEOUT
+
+    if text is not None:
+        return Command.parse(text, timeout if timeout is not None else DEFAULT_TIMEOUT, cwd=Path.cwd())
+    if timeout is None:
+        return None
+    if task_command is None:
+        raise ConfigError("--command-timeout needs a command (--command, or 'command' in the task file)")
+    if not timeout > 0:
+        raise ConfigError(f"--command-timeout must be positive (got {timeout:g})")
+    return dataclasses.replace(task_command, timeout=float(timeout))
+
+
+def _backend(name: str, command):
+    """A backend object for a one-off execution (the command backend needs its command)."""
+    if command is not None and name != "command":
+        raise ConfigError("--command is for --backend command")
+    from stl_lfd.sim import new_backend
+
+    return new_backend(name, command) if name == "command" else name
 
 
 def _whole_seconds(advance):
@@ -344,6 +377,8 @@ def optimize(
     method: Optional[MethodOption] = typer.Option(
         None, help="stl (composite BO on the spec's parts), pi (the paper), logei, or random search (default: the task's)."
     ),
+    command: Optional[str] = typer.Option(None, "--command", help=COMMAND_HELP),
+    command_timeout: Optional[float] = typer.Option(None, "--command-timeout", help=COMMAND_TIMEOUT_HELP),
 ) -> None:
     """Optimise a skill so that its execution satisfies the task's STL specification.
 
@@ -366,6 +401,7 @@ def optimize(
     given = dict(spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None)
     with user_errors():
         file_task = load_task(task_file)
+        given["command"] = _command(command, command_timeout, file_task.command)
         run_dir = out or Path("runs") / file_task.name
         if resume:
             prepared = resume_run(run_dir, iterations, file_task, given)
@@ -378,6 +414,100 @@ def optimize(
         summary = optimise(prepared, printer.trial)
         printer.done(summary)
     print(json.dumps(summary.to_json(), indent=2))
+
+
+@app.command(cls=_PlainUsage)
+def ask(
+    target: Path = typer.Argument(..., metavar="TASK_FILE_OR_RUN", help="A task file (starts a run) or a run directory."),
+    out: Optional[Path] = typer.Option(None, "--out", help="With a task file: the run directory (default: runs/<task name>)."),
+    spec: Optional[Path] = typer.Option(None, "--spec", help="Use this STL spec instead of the task's (a new run only)."),
+    iterations: Optional[int] = typer.Option(None, "--iterations", "-N", help="Total number of trials N (default: the task's)."),
+    init: Optional[int] = typer.Option(None, "--init", "-M", help="Random (Sobol) initial trials M (default: the task's)."),
+    seed: Optional[int] = typer.Option(None, "--seed", help="Seed of the initial trials and of the acquisition optimiser."),
+    method: Optional[MethodOption] = typer.Option(None, help="Optimiser method (default: the task's)."),
+) -> None:
+    """Hand out the next trial to execute elsewhere: write its reference CSV, print its path.
+
+    The first ask of a task file creates the run with trial 0, the unoptimised skill. Execute
+    the reference (see the README's contract), then record the signals with 'stlopt tell'.
+    Asking again before telling prints the same trial. When the run has all its trials,
+    nothing is printed on stdout. The same seed gives the same trials as 'stlopt optimize'.
+    References outside the scene's safety limits are recorded as failed trials, never handed out.
+
+    Example:
+
+    \b
+        ref=$(stlopt ask configs/phi1.yaml --out runs/robot)
+        my_executor "$ref" signals.csv && stlopt tell runs/robot signals.csv
+    """
+    from stl_lfd.optim import load_task
+    from stl_lfd.optim.asktell import ask as ask_trial
+    from stl_lfd.optim.asktell import ask_new
+    from stl_lfd.optim.resume import inputs_record
+
+    given = dict(spec=spec, seed=seed, initial=init, trials=iterations, method=method.value if method else None)
+
+    def refused(trial) -> None:
+        print(f"trial {trial.trial} refused: {trial.error}", file=sys.stderr)
+
+    with user_errors():
+        if target.is_dir():
+            if out is not None or any(value is not None for key, value in given.items() if key != "trials"):
+                raise ConfigError(f"{target}: a run directory keeps its own settings; only --iterations may be given with it")
+            run_dir, asked = target, ask_trial(target, iterations, on_refused=refused)
+        else:
+            file_task = load_task(target)
+            run_dir = out or Path("runs") / file_task.name
+            if run_dir.is_dir() and any(run_dir.iterdir()):
+                asked = ask_trial(run_dir, iterations, file_task, given, on_refused=refused)
+            else:
+                task = file_task.with_overrides(**given)
+                asked = ask_new(task, run_dir, inputs_record(file_task, given, task), lambda message: print(message, file=sys.stderr))
+    if asked is None:
+        print(f"{run_dir}: the run has all its trials (raise --iterations to extend it; stlopt report {run_dir})", file=sys.stderr)
+        return
+    print(asked.reference)
+    what = "the unoptimised skill" if asked.trial == 0 else f"chosen by {asked.phase}"
+    state = "still pending" if asked.again else "to execute"
+    print(f"trial {asked.trial} ({what}) {state}; then: stlopt tell {run_dir} SIGNALS.csv", file=sys.stderr)
+
+
+@app.command(cls=_PlainUsage)
+def tell(
+    run_dir: Path = typer.Argument(..., metavar="RUN_DIR", help="The run directory that 'stlopt ask' handed the trial out of."),
+    signals: Optional[Path] = typer.Argument(None, metavar="SIGNALS_CSV", help="The signals recorded while executing the pending trial."),
+    failed: Optional[str] = typer.Option(None, "--failed", help="Record the pending trial as failed, with this reason, instead of signals."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object (trial, robustness, satisfied, best) instead of the number."),
+) -> None:
+    """Record the signals of the trial 'stlopt ask' handed out, and print its robustness.
+
+    Example:
+
+    \b
+        stlopt tell runs/robot signals.csv
+        stlopt tell runs/robot --failed "protective stop at t=4 s"
+    """
+    from stl_lfd.optim.asktell import tell as tell_trial
+
+    with user_errors():
+        if (signals is None) == (failed is None):
+            raise ConfigError("give the signals CSV of the pending trial, or --failed REASON (not both)")
+        told = tell_trial(run_dir, signals, failed)
+    summary = told.summary
+    number = told.trial.trial if told.trial is not None else 0
+    if as_json:
+        record = {"trial": number, "robustness": told.robustness, "satisfied": told.robustness is not None and told.robustness > 0}
+        record.update(best_trial=summary.best_trial, best_robustness=summary.best_robustness, trials=summary.trials, budget=summary.budget)
+        print(json.dumps(record))
+    elif told.robustness is not None:
+        print(f"{told.robustness:.10g}")
+    if told.trial is not None and told.trial.error:
+        print(f"trial {number} failed: {told.trial.error}", file=sys.stderr)
+    else:
+        print(f"trial {number}: robustness {told.robustness:+.5f} ({'satisfied' if told.robustness > 0 else 'violated'})", file=sys.stderr)
+    left = summary.budget - summary.trials
+    best = f"best so far: trial {summary.best_trial} ({summary.best_robustness:+.5f})" if summary.best_trial is not None else "no successful trial yet"
+    print(f"{best}; {left} trials left" + (f": stlopt ask {run_dir}" if left > 0 else ""), file=sys.stderr)
 
 
 @app.command(cls=_PlainUsage)

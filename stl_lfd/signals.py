@@ -78,13 +78,14 @@ def read_signal_csv(path: str | Path, required: tuple[str, ...] = ()) -> SignalT
     return SignalTable(times.copy(), columns, shown)
 
 
-def write_signal_csv(table: SignalTable, destination: str | Path | TextIO) -> None:
-    """Write `table` as CSV (`t` first) to a path, "-" (standard output) or an open stream."""
+def write_signal_csv(table: SignalTable, destination: str | Path | TextIO, digits: int = 12) -> None:
+    """Write `table` as CSV (`t` first) to a path, "-" (standard output) or an open stream,
+    with `digits` significant digits (17 reads back exactly)."""
     names = list(table.columns)
     data = np.column_stack([table.times] + [table.columns[name] for name in names])
     body = io.StringIO()
     body.write(",".join([TIME_COLUMN] + names) + "\n")
-    np.savetxt(body, data, delimiter=",", fmt="%.12g")
+    np.savetxt(body, data, delimiter=",", fmt=f"%.{digits}g")
     if isinstance(destination, (str, Path)) and str(destination) != "-":
         write_atomically(Path(destination), body.getvalue())
     else:

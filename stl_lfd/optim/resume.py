@@ -18,7 +18,9 @@ from stl_lfd.errors import RunError
 from stl_lfd.optim.task import Task
 
 # Command-line overrides, by their `Task.with_overrides` name, as the CLI spells them.
-OPTIONS = {"spec": "--spec", "initial": "--init", "seed": "--seed", "backend": "--backend", "method": "--method", "trials": "--iterations"}
+OPTIONS = {
+    "spec": "--spec", "initial": "--init", "seed": "--seed", "backend": "--backend", "command": "--command", "method": "--method", "trials": "--iterations",
+}  # fmt: skip
 # Settings that may differ on resume: the budget, and the name (a label, not part of the problem).
 MAY_CHANGE = ("name",)
 
@@ -97,13 +99,15 @@ def _first_difference(ours: Any, theirs: Any, key: str = "") -> tuple[str, Any, 
 
 
 def _setting(task: Task, key: str) -> Any:
-    return task.spec if key == "spec" else getattr(task, key) if key == "backend" else getattr(task.optimizer, key)
+    return task.spec if key == "spec" else getattr(task, key) if key in ("backend", "command") else getattr(task.optimizer, key)
 
 
 def _plain(value: Any) -> Any:
     """Option values as recorded in JSON: paths absolute, enums by value."""
     if isinstance(value, Path):
         return str(value.resolve())
+    if hasattr(value, "to_dict"):  # a Command
+        return value.to_dict()
     return getattr(value, "value", value)
 
 

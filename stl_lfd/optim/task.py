@@ -155,10 +155,7 @@ class Task:
             data["states"] = self.states
         data.update(scene=self.scene, backend=self.backend, semantics=self.semantics, nu=self.nu, duration=self.duration, rate=self.rate)
         if self.command is not None:
-            command = self.command
-            data["command"] = {"run": command.run[0] if command.shell else list(command.run), "timeout": command.timeout, "shell": command.shell}
-            if command.cwd is not None:
-                data["command"]["cwd"] = str(command.cwd.resolve())
+            data["command"] = self.command.to_dict()
         blocks = {name: _parameters_to_yaml(parameters) for name, parameters in self.parameters.items()}
         data["parameters"] = blocks[SINGLE_SKILL] if self.behaviour is None else blocks
         opt = self.optimizer

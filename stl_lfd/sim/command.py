@@ -29,7 +29,7 @@ import tempfile
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -88,6 +88,13 @@ class Command:
                 argument = argument.replace("{" + name + "}", quote(value))
             arguments.append(argument)
         return arguments[0] if self.shell else arguments
+
+    def to_dict(self) -> dict[str, Any]:
+        """The task-file form: `run` (a list, or the string with `shell`), `timeout`, `shell`, `cwd`."""
+        data: dict[str, Any] = {"run": self.run[0] if self.shell else list(self.run), "timeout": self.timeout, "shell": self.shell}
+        if self.cwd is not None:
+            data["cwd"] = str(Path(self.cwd).resolve())
+        return data
 
     def shown(self) -> str:
         return self.run[0] if self.shell else shlex.join(self.run)

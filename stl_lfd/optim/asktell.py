@@ -1,0 +1,242 @@
+"""Trials run elsewhere: `ask` hands out the next trial's reference, `tell` records the signals
+its execution recorded.
+
+A run asked for from a task file starts with trial 0, the unoptimised skill, whose signals
+give the run its initial robustness. Each ask chooses the point exactly as `optimise` would
+(same seed, same history, same point), checks the reference against the scene's safety
+limits (an unsafe one is recorded as a failed trial at once, and the next point is chosen),
+writes it to `executions/trial-NNNN/reference.csv` and records the trial as pending
+(`pending.json`). Asking again before telling returns the same trial; a pending trial
+survives restarts. Telling records the trial, and a killed tell is completed by the next ask
+or tell (the pending record of a trial already in `trials.jsonl` is dropped).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from stl_lfd.errors import ExecutionError, RunError, SignalError
+from stl_lfd.optim.loop import Outcome, Trial, next_point
+from stl_lfd.optim.resume import check_resume
+from stl_lfd.optim.run import PreparedRun, Recorder, SkillObjective, objective_for, task_models
+from stl_lfd.optim.rundir import SIGNALS_DIR, Pending, RunDirectory, StagedRun, check_new_run_path
+from stl_lfd.optim.summary import Summary
+from stl_lfd.optim.task import Task
+from stl_lfd.signals import read_signal_csv, write_signal_csv
+from stl_lfd.sim import Reference, UnsafeReference, check_reference, exchange_folder, read_reference_csv, write_reference_csv
+from stl_lfd.sim.command import EXECUTIONS_DIR, check_coverage, tracking_error
+
+REFERENCE_FILE = "reference.csv"
+
+
+@dataclass(frozen=True)
+class Asked:
+    """A trial handed out: its number (0: the unoptimised skill), the reference CSV to execute,
+    what chose it, and whether it was already pending (asked again)."""
+
+    trial: int
+    reference: Path
+    phase: str
+    again: bool = False
+
+
+@dataclass(frozen=True)
+class Told:
+    """A told trial (None for trial 0, the unoptimised skill), its robustness, and the run's
+    summary after it."""
+
+    trial: Trial | None
+    robustness: float | None
+    summary: Summary
+
+
+def ask_new(task: Task, out: Path, inputs: dict[str, Any], learn_progress: Callable[[str], None] = lambda message: None) -> Asked:
+    """Create the run directory `out` for `task`, with trial 0 (the unoptimised skill) pending."""
+    check_new_run_path(Path(out))
+    if task.model is None:
+        learn_progress(f"learning the skills of {task.source.name}")
+    models = task_models(task)
+    _, objective = objective_for(task, models, execute=False)
+    reference = objective.reference(models)
+    _check_safety(objective, reference)  # nothing to record a refusal in yet: an error
+    with StagedRun(out) as staged:
+        write_reference_csv(reference, _reference_path(staged.path, 0), objective.scene.gripper_opening)
+        run = staged.commit(task, models, None, None, inputs, Pending(0, "initial", None, 0.0, time.time()))
+    run.close()
+    return Asked(0, _reference_path(Path(out), 0), "initial")
+
+
+def ask(
+    out: Path,
+    trials: int | None = None,
+    file_task: Task | None = None,
+    given: dict[str, Any] | None = None,
+    on_refused: Callable[[Trial], None] = lambda trial: None,
+) -> Asked | None:
+    """The pending trial of the run in `out`, or the next one; None when the run has all its
+    `trials` (default: the task's). With `file_task` and `given` (the task file and options
+    named again), refuse when they ask for another run. Unsafe references become failed trials,
+    passed to `on_refused`."""
+    run = RunDirectory.open(out, for_writing=True)
+    try:
+        task = run.task()
+        if file_task is not None:
+            check_resume(Path(out), task, run.inputs(), file_task, given or {})
+        if trials is not None:
+            task = task.with_overrides(trials=trials)
+        pending = _live_pending(run)
+        if pending is not None:
+            return Asked(pending.trial, _reference_path(run.path, pending.trial), pending.phase, again=True)
+        prepared = _prepared(run, task)
+        recorder, objective = Recorder(prepared), prepared.objective
+        while len(recorder.history) < task.optimizer.trials:
+            start = time.perf_counter()
+            x, phase = next_point(recorder.history, prepared.space.bounds, task.optimizer, objective.parts)
+            number = len(recorder.history) + 1
+            try:
+                reference = objective.reference(prepared.space.apply(prepared.models, x))
+                _check_safety(objective, reference)
+            except ExecutionError as error:  # unsafe, or no reference at all: a failed trial, as optimise records it
+                seconds = time.perf_counter() - start
+                trial = Trial(number, phase, x, None, "failed", str(error), optimizer_seconds=seconds)
+                recorder.record(trial, None, seconds)
+                on_refused(trial)
+                continue
+            write_reference_csv(reference, _reference_path(run.path, number), objective.scene.gripper_opening)
+            run.write_pending(Pending(number, phase, x, time.perf_counter() - start, time.time()))
+            return Asked(number, _reference_path(run.path, number), phase)
+        return None
+    finally:
+        run.close()
+
+
+def tell(out: Path, signals_path: Path | None, failure: str | None = None) -> Told:
+    """Record the pending trial of the run in `out`: the signals its execution recorded, or
+    (`failure`, for trials 1 and up) that the execution failed and why.
+
+    Raises:
+        RunError: nothing is pending, or the signals belong to another trial.
+        SignalError: the CSV is unreadable, too short, or lacks a signal the spec needs.
+    """
+    run = RunDirectory.open(out, for_writing=True)
+    try:
+        pending = _live_pending(run)
+        if pending is None:
+            raise RunError(f"{out}: no trial is pending; hand out the next one with: stlopt ask {out}")
+        task = run.task()
+        models = run.models()
+        space, objective = objective_for(task, models, execute=False)
+        reference = read_reference_csv(_reference_path(run.path, pending.trial))
+        if failure is not None:
+            if pending.trial == 0:
+                raise RunError(f"{out}: the unoptimised skill (trial 0) cannot be told as failed: the run needs its signals to start")
+            outcome, error = None, f"execution failed: {failure}"
+        else:
+            outcome, error = _scored(objective, reference, Path(signals_path), run, pending.trial), None
+        if pending.trial == 0:
+            return _tell_initial(run, task, space, outcome, pending)
+        prepared = PreparedRun(task, run, models, space, objective, run.trials(), run.summary())
+        seconds = time.time() - pending.asked
+        robustness = None if outcome is None or not np.isfinite(outcome.robustness) else float(outcome.robustness)
+        if outcome is not None and robustness is None:
+            error = f"robustness is {outcome.robustness}"
+        trial = Trial(
+            pending.trial, pending.phase, pending.x, robustness, "ok" if robustness is not None else "failed", error,
+            optimizer_seconds=pending.optimizer_seconds, rollout_seconds=max(seconds, 0.0),
+            components=outcome.components if robustness is not None else None,
+        )  # fmt: skip
+        recorder = Recorder(prepared)
+        recorder.record(trial, outcome.payload if outcome is not None else None, trial.wall_seconds)
+        run.clear_pending()
+        return Told(trial, trial.robustness, recorder.summary())
+    finally:
+        run.close()
+
+
+def _tell_initial(run: RunDirectory, task: Task, space: Any, outcome: Outcome, pending: Pending) -> Told:
+    if not np.isfinite(outcome.robustness):
+        raise SignalError(f"{outcome.payload.source}: the robustness of the unoptimised skill is {outcome.robustness}; the run needs a finite one to start")
+    write_signal_csv(outcome.payload, run.path / SIGNALS_DIR / "initial.csv")
+    summary = Summary.of(task, space, float(outcome.robustness), [], max(time.time() - pending.asked, 0.0), outcome.components)
+    run.write_summary(summary)
+    run.clear_pending()
+    return Told(None, float(outcome.robustness), summary)
+
+
+def _scored(objective: SkillObjective, reference: Reference, path: Path, run: RunDirectory, trial: int) -> Outcome:
+    """The signals at `path`, checked to be trial `trial`'s, scored."""
+    _check_not_another_trials(path, run, trial)
+    signals = read_signal_csv(path, required=("x", "y", "z"))
+    check_coverage(signals, reference.duration)
+    errors = tracking_error(signals, reference)
+    tolerance = objective.scene.tracking_tolerance
+    if errors.max() > tolerance:
+        _check_follows(signals, reference, errors, tolerance, run, trial)
+    return objective.score(signals)
+
+
+def _check_not_another_trials(path: Path, run: RunDirectory, trial: int) -> None:
+    """Signals written into another trial's exchange folder are that trial's."""
+    executions = (run.path / EXECUTIONS_DIR).resolve()
+    folder = path.resolve().parent
+    if folder.parent == executions and folder.name != exchange_folder(run.path, trial).name:
+        raise RunError(f"{path}: belongs to {folder.name} of the run, but trial {trial} is pending; tell the signals of trial {trial}")
+
+
+def _check_follows(signals: Any, reference: Reference, errors: np.ndarray, tolerance: float, run: RunDirectory, trial: int) -> None:
+    """Signals that do not follow the pending reference but follow another trial's are refused."""
+    for folder in sorted((run.path / EXECUTIONS_DIR).iterdir()):
+        other = folder / REFERENCE_FILE
+        if folder.name == exchange_folder(run.path, trial).name or not other.is_file():
+            continue
+        try:
+            other_errors = tracking_error(signals, read_reference_csv(other))
+        except SignalError:
+            continue
+        if other_errors.max() <= tolerance:
+            raise RunError(
+                f"{signals.source}: these signals follow the reference of {folder.name} (worst error {1000 * other_errors.max():.1f} mm), "
+                f"not that of the pending trial {trial} ({1000 * errors.max():.1f} mm); tell the signals of trial {trial}"
+            )
+
+
+def _check_safety(objective: SkillObjective, reference: Reference) -> None:
+    scene = objective.scene
+    if scene.safety is None:
+        raise ExecutionError(f"the scene {scene.name} declares no 'safety' (workspace and max_speed), which references need before they leave stlopt")
+    check_reference(reference, scene.safety)
+
+
+def _live_pending(run: RunDirectory) -> Pending | None:
+    """The pending trial, unless a tell killed after recording it left its record behind."""
+    pending = run.pending()
+    if pending is None:
+        return None
+    recorded = (run.path / "summary.json").exists() if pending.trial == 0 else len(run.trials()) >= pending.trial
+    if recorded:
+        run.clear_pending()
+        return None
+    return pending
+
+
+def _prepared(run: RunDirectory, task: Task) -> PreparedRun:
+    models = run.models()
+    space, objective = objective_for(task, models, execute=False)
+    history = run.trials()
+    if any(len(trial.x) != space.dimension for trial in history):
+        raise RunError(f"{run.path / 'trials.jsonl'}: damaged (the recorded points do not have the task's {space.dimension} parameters)")
+    return PreparedRun(task, run, models, space, objective, history, run.summary())
+
+
+def _reference_path(run_dir: Path, trial: int) -> Path:
+    path = exchange_folder(run_dir, trial) / REFERENCE_FILE
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+__all__ = ["Asked", "Told", "UnsafeReference", "ask", "ask_new", "tell"]
