@@ -1,0 +1,191 @@
+"""The command backend, the reference CSV and the safety gate (with a kinematic test executor)."""
+
+import json
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from stl_lfd.errors import ConfigError, ExecutionError, SignalError
+from stl_lfd.optim import load_task, optimise, start_run
+from stl_lfd.sim import (
+    Command,
+    CommandBackend,
+    Reference,
+    Safety,
+    UnsafeReference,
+    check_reference,
+    execute,
+    load_scene,
+    read_reference_csv,
+    write_reference_csv,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+FAKE = ROOT / "tests" / "executors" / "fake.py"
+FORCE_SPEC = "L := x in [0.3, 0.7]\nphi := F L & G force < 5\n"
+
+
+def executor_task(tmp_path, model_file, spec=None, trials=4, timeout=60, scene="free_space", backend="command"):
+    spec_path = ROOT / "specs" / "phi1.stl"
+    if spec is not None:
+        spec_path = tmp_path / "spec.stl"
+        spec_path.write_text(spec)
+    path = tmp_path / "task.yaml"
+    path.write_text(
+        f"name: robot\nspec: {spec_path}\nmodel: {model_file}\nbackend: {backend}\nscene: {scene}\nduration: 22\nrate: 50\n"
+        f"command:\n  run: [{sys.executable}, {FAKE}, '{{reference}}', '{{signals}}']\n  timeout: {timeout}\n"
+        "parameters:\n  means: {components: [2, 3]}\n  durations: {components: all}\n"
+        f"optimizer: {{initial: {min(2, trials)}, trials: {trials}, seed: 5}}\n"
+    )
+    return load_task(path)
+
+
+def trials_of(run):
+    return [json.loads(line) for line in (run / "trials.jsonl").read_text().splitlines()]
+
+
+def sample_reference():
+    times = np.arange(5) / 240
+    positions = np.column_stack([0.4 + 0.01 * times, np.full(5, 0.1), 0.3 + np.sin(times)])
+    skills = np.array(["pick", "pick", "grasp", "insert", "insert"])
+    return Reference(times, positions, np.array([0.08, 0.08, 0.0, 0.0, 0.0]), ((times[2], "grasp"),), skills, np.array([1, 2, 0, 1, 1]))
+
+
+def test_the_reference_csv_reads_back_exactly(tmp_path):
+    reference = sample_reference()
+    write_reference_csv(reference, tmp_path / "reference.csv", 0.08)
+    assert (tmp_path / "reference.csv").read_text().splitlines()[0] == "t,x,y,z,gripper,skill,state,event"
+    again = read_reference_csv(tmp_path / "reference.csv")
+    assert np.array_equal(again.times, reference.times) and np.array_equal(again.positions, reference.positions)
+    assert np.array_equal(again.gripper, reference.gripper) and again.events == reference.events
+    assert list(again.skills) == list(reference.skills) and list(again.states) == [1, 2, 0, 1, 1]
+
+
+def test_a_bad_reference_csv_names_the_line(tmp_path):
+    path = tmp_path / "reference.csv"
+    path.write_text("t,x,y,z,gripper,skill,state,event\n0,0.4,0,0.3,0.08,skill,1,\n0.1,0.4,oops,0.3,0.08,skill,1,\n")
+    with pytest.raises(SignalError, match=r"reference.csv:3: not a number"):
+        read_reference_csv(path)
+
+
+def test_the_safety_gate_names_the_time_and_the_point():
+    safety = Safety((0.2, -0.5, 0.1), (0.8, 0.5, 0.8), max_speed=1.0)
+    times = np.arange(4) / 10
+    inside = np.array([[0.4, 0.0, 0.3], [0.41, 0.0, 0.3], [0.42, 0.0, 0.3], [0.43, 0.0, 0.3]])
+    check_reference(Reference(times, inside), safety)
+    low = inside.copy()
+    low[2, 2] = 0.05
+    with pytest.raises(UnsafeReference, match=r"t = 0.200 s it reaches \(x=0.420, y=0.000, z=0.050\), outside the workspace \(z below 0.1\)"):
+        check_reference(Reference(times, low), safety)
+    fast = inside.copy()
+    fast[3, 0] = 0.6  # 0.18 m in 0.1 s
+    with pytest.raises(UnsafeReference, match=r"t = 0.200 s it moves at 1.800 m/s .* faster than the scene's max_speed of 1 m/s"):
+        check_reference(Reference(times, fast), safety)
+
+
+def test_bundled_scenes_declare_safety_and_bad_limits_are_refused(tmp_path):
+    for name in ("free_space", "pick_insert"):
+        assert load_scene(name).safety is not None
+    path = tmp_path / "scene.yaml"
+    path.write_text("description: x\nsafety:\n  workspace: {lower: [0.5, 0, 0], upper: [0.4, 1, 1]}\n  max_speed: 1\n")
+    with pytest.raises(ConfigError, match=r"scene.yaml: 'safety': the workspace's lower corner .* below its upper corner"):
+        load_scene(path)
+    path.write_text("description: x\nsafety:\n  workspace: {lower: [0, 0, 0], upper: [1, 1, 1]}\n")
+    with pytest.raises(ConfigError, match="max_speed"):
+        load_scene(path)
+
+
+def test_the_command_backend_gives_what_the_in_process_backend_gives(tmp_path, learned_model_file):
+    command_task = executor_task(tmp_path, learned_model_file)
+    optimise(start_run(command_task, tmp_path / "command"))
+    optimise(start_run(command_task.with_overrides(backend="kinematic"), tmp_path / "kinematic"))
+    command, kinematic = trials_of(tmp_path / "command"), trials_of(tmp_path / "kinematic")
+    assert [(t["x"], t["robustness"], t["components"]) for t in command] == [(t["x"], t["robustness"], t["components"]) for t in kinematic]
+    for folder in ("initial", "trial-0001", "trial-0004"):
+        assert {path.name for path in (tmp_path / "command" / "executions" / folder).iterdir()} == {"reference.csv", "signals.csv", "stdout.txt", "stderr.txt"}
+
+
+def test_placeholders_and_environment_reach_the_command(tmp_path, learned_model_file, monkeypatch):
+    monkeypatch.setenv("EXECUTOR_MODE", "env")
+    optimise(start_run(executor_task(tmp_path, learned_model_file, trials=1), tmp_path / "run"))
+    folder = tmp_path / "run" / "executions" / "trial-0001"
+    told = dict(line.split("=", 1) for line in (folder / "stdout.txt").read_text().splitlines())
+    assert told["STLOPT_TRIAL"] == "1" and told["STLOPT_RUN_DIR"] == str((tmp_path / "run").resolve())
+    assert told["STLOPT_SCENE"] == "free_space" and told["STLOPT_RATE"] == "50"
+    assert told["argv"] == str([str((folder / "reference.csv").resolve()), str((folder / "signals.csv").resolve())])
+
+
+@pytest.mark.parametrize(
+    "mode, message",
+    [
+        ("exit1", r"the command exited with status 1: motor fault on joint 4 \(see .*trial-0001/stderr.txt\)"),
+        ("hang", r"did not finish within its timeout of 2 s and was stopped"),
+        ("garbage", r"trial-0001/signals.csv:1: missing column 't'"),
+        ("noforce", r"trial-0001/signals.csv: no column force, which the spec needs"),
+        ("nothing", r"the command exited without writing .*trial-0001/signals.csv"),
+        ("delete", r"trial-0001/reference.csv: the command removed or changed the reference it was given"),
+    ],
+)
+def test_a_bad_executor_fails_its_trial_and_the_run_goes_on_and_resumes(tmp_path, learned_model_file, monkeypatch, mode, message):
+    monkeypatch.setenv("EXECUTOR_MODE", mode)
+    monkeypatch.setenv("EXECUTOR_BAD_TRIAL", "1")
+    monkeypatch.setenv("EXECUTOR_CHILD_PID", str(tmp_path / "child.pid"))
+    task = executor_task(tmp_path, learned_model_file, spec=FORCE_SPEC, trials=2, timeout=2)
+    optimise(start_run(task, tmp_path / "run"))
+    first, second = trials_of(tmp_path / "run")
+    assert first["status"] == "failed" and second["status"] == "ok"
+    assert __import__("re").search(message, first["error"]), first["error"]
+    if mode == "hang":  # the executor's own child was stopped with it
+        child = int((tmp_path / "child.pid").read_text())
+        assert not _alive(child)
+    from stl_lfd.optim import resume_run
+
+    optimise(resume_run(tmp_path / "run", trials=3))
+    assert [trial["status"] for trial in trials_of(tmp_path / "run")] == ["failed", "ok", "ok"]
+
+
+def _alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    status = Path(f"/proc/{pid}/stat").read_text().split()[2] if Path(f"/proc/{pid}/stat").exists() else "X"
+    return status not in ("Z", "X")
+
+
+def test_an_unsafe_reference_never_reaches_the_command(tmp_path, learned_model_file, monkeypatch):
+    scene = tmp_path / "tight.yaml"
+    scene.write_text("description: tight\nsafety:\n  workspace: {lower: [0.2, -0.6, 0.1], upper: [0.8, 0.6, 0.8]}\n  max_speed: 0.6\n")
+    monkeypatch.setenv("EXECUTOR_MARKER", str(tmp_path / "ran.txt"))
+    task = executor_task(tmp_path, learned_model_file, trials=8, scene=str(scene))
+    optimise(start_run(task, tmp_path / "run"))
+    trials = trials_of(tmp_path / "run")
+    refused = [trial["trial"] for trial in trials if trial["status"] == "failed"]
+    assert refused, "the tight speed limit should refuse some trials"
+    for trial in trials:
+        if trial["status"] == "failed":
+            assert trial["error"].startswith("unsafe reference, not executed: at t = ") and "max_speed of 0.6 m/s" in trial["error"]
+    ran = [int(line) for line in (tmp_path / "ran.txt").read_text().split()]
+    assert ran == [0] + [trial["trial"] for trial in trials if trial["status"] == "ok"]
+
+
+def test_the_command_backend_needs_a_command_and_limits(tmp_path, learned_model_file):
+    task = executor_task(tmp_path, learned_model_file)
+    with pytest.raises(ConfigError, match="the command backend needs the command"):
+        task.with_overrides(backend="command").__class__(**{**task.__dict__, "command": None})
+    with pytest.raises(ConfigError, match="empty"):
+        Command.parse("   ")
+    reference = Reference(np.arange(3) / 240, np.tile([0.4, 0.0, 0.3], (3, 1)))
+    backend = CommandBackend(Command.parse(f"{sys.executable} {FAKE} {{reference}} {{signals}}"))
+    with pytest.raises(ExecutionError, match="declares no 'safety'"):
+        execute(reference, load_scene("free_space").__class__(name="bare", description="no limits"), backend)
+
+
+def test_a_missing_program_is_a_clear_error():
+    reference = Reference(np.arange(3) / 240, np.tile([0.4, 0.0, 0.3], (3, 1)))
+    backend = CommandBackend(Command.parse("no-such-executor-xyz {reference}"))
+    with pytest.raises(ExecutionError, match=r"cannot start the command 'no-such-executor-xyz' \(No such file or directory\)"):
+        execute(reference, load_scene("free_space"), backend)
