@@ -183,7 +183,9 @@ def run_command(command: Command, values: dict[str, str], folder: Path) -> None:
                 stdin=subprocess.DEVNULL, stdout=stdout, stderr=stderr, start_new_session=True,
             )  # fmt: skip
         except OSError as error:
-            raise ExecutionError(f"cannot start the command {command.run[0].split()[0] if command.shell else command.run[0]!r} ({error.strerror or error})") from None
+            raise ExecutionError(
+                f"cannot start the command {command.run[0].split()[0] if command.shell else command.run[0]!r} ({error.strerror or error})"
+            ) from None
         try:
             status = process.wait(timeout=command.timeout)
         except subprocess.TimeoutExpired:
