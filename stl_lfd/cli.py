@@ -434,11 +434,11 @@ def ask(
     nothing is printed on stdout. The same seed gives the same trials as 'stlopt optimize'.
     References outside the scene's safety limits are recorded as failed trials, never handed out.
 
-    Example:
+    Examples (then execute the printed reference and 'stlopt tell' its signals):
 
     \b
-        ref=$(stlopt ask configs/phi1.yaml --out runs/robot)
-        my_executor "$ref" signals.csv && stlopt tell runs/robot signals.csv
+        stlopt ask configs/phi1.yaml --out runs/robot
+        stlopt ask runs/robot
     """
     from stl_lfd.optim import load_task
     from stl_lfd.optim.asktell import ask as ask_trial

@@ -76,7 +76,7 @@ def next_point(history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, p
     if optimizer.method == "random":
         return random_point(bounds, optimizer.seed, index), "random"
     X, Y = observations(history)
-    if len(Y) == 0:  # every trial so far failed: nothing to model yet
+    if len(Y) == 0 or np.ptp(Y) == 0:  # every trial so far failed, or all gave the same value: nothing to model yet
         return random_point(bounds, optimizer.seed, index), "random"
     if optimizer.method == "stl":
         return _composite_point(history, X, Y, bounds, optimizer, parts), "stl"
