@@ -1,6 +1,6 @@
 """`make bench`: run every benchmark and print its table."""
 
-from benchmarks import bench_cli, bench_hsmm, bench_optim, bench_sim, bench_stl
+from benchmarks import bench_cli, bench_command, bench_hsmm, bench_optim, bench_sim, bench_stl
 
 
 def main() -> None:
@@ -8,6 +8,7 @@ def main() -> None:
     bench_stl.main()
     bench_hsmm.main()
     bench_sim.main()
+    bench_command.main([])
     bench_optim.main([])
 
 

@@ -5,7 +5,8 @@ The public API, loaded on first use (so `import stl_lfd` loads neither torch nor
 - STL: `Spec` (`Spec.parse`, `Spec.load`, `.robustness`, `.trace`, `.components`), `compile_spec`;
 - signals: `SignalTable`, `read_signal_csv`, `write_signal_csv`;
 - skills: `HSMM` (`fit`, `predict`, `sample`), `learn`, `learn_from_folder`, `load_model`, `save_model`,
-  `retrieve`; `load_scene`, `execute`, `rollout_model`;
+  `retrieve`; `load_scene`, `execute`, `rollout_model`; `Command` (an external executor, for
+  `backend="command"`), `read_reference_csv`;
 - optimisation: `optimize` -> `Result`, with `Parameters`, `MeanParameters`,
   `DurationParameters` and `Optimizer`; `load_task` for task files.
 """
@@ -30,6 +31,8 @@ _HOMES = {
     "retrieve": "stl_lfd.hsmm",
     "load_scene": "stl_lfd.sim",
     "execute": "stl_lfd.sim",
+    "Command": "stl_lfd.sim",
+    "read_reference_csv": "stl_lfd.sim",
     "rollout_model": "stl_lfd.skill",
     "optimize": "stl_lfd.optim.api",
     "Result": "stl_lfd.optim.api",

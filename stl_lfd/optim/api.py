@@ -25,6 +25,7 @@ from stl_lfd.optim.run import PreparedRun, optimise, prepare_objective
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import SINGLE_SKILL, Optimizer, Parameters, Task
 from stl_lfd.signals import SignalTable
+from stl_lfd.sim import Command
 from stl_lfd.stl import Spec
 
 
@@ -110,6 +111,7 @@ def optimize(
     nu: float = 1.0,
     rate: float = 100.0,
     behaviour: str | Path | None = None,
+    command: Command | None = None,
     on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None,
 ) -> Result:
     """Adapt `models` so that their execution satisfies `spec`, as robustly as possible.
@@ -121,6 +123,8 @@ def optimize(
             for a behaviour.
         optimizer: method, initial (M) and total (N) trials, seed (default `Optimizer()`).
         duration: seconds of each rollout (the spec's windows must fit in it).
+        command: the executor of `backend="command"` (its exchange files go to a temporary
+            folder per execution, removed afterwards).
         on_trial: called after each trial with it and the best trial so far.
 
     Returns:
@@ -135,7 +139,7 @@ def optimize(
     task = Task(
         name="python", spec=Path(spec.source), model=None, demos=None, behaviour=Path(behaviour) if behaviour is not None else None, states=0,
         scene=scene, backend=backend, semantics=semantics, nu=nu, duration=float(duration), rate=float(rate),
-        parameters=parameters, optimizer=optimizer or Optimizer(), source=Path("<python>"),
+        parameters=parameters, optimizer=optimizer or Optimizer(), source=Path("<python>"), command=command,
     )  # fmt: skip
     space, objective, initial, summary = prepare_objective(task, models, spec.tree)
     record = MemoryRun(initial.payload)

@@ -319,12 +319,18 @@ def _distance_to_shape(shape: tuple, point: np.ndarray) -> float:
 
 
 def low_pass(values: np.ndarray, cutoff_hz: float, period: float) -> np.ndarray:
-    """First-order low-pass filter, as a force sensor's electronics would apply (starts at 0)."""
-    from scipy.signal import lfilter
+    """First-order low-pass filter, as a force sensor's electronics would apply (starts at 0).
 
+    A plain loop (a few ms per rollout): `scipy.signal.lfilter` gives the same values but its
+    import takes about a second, which every one-rollout process (`stlopt rollout`, an executor)
+    would pay."""
     gain = 1.0 - math.exp(-2.0 * math.pi * cutoff_hz * period)
-    # y[n] = y[n-1] + gain (x[n] - y[n-1])
-    return lfilter([gain], [1.0, gain - 1.0], values)
+    filtered = np.empty(len(values))
+    state = 0.0
+    for index, value in enumerate(np.asarray(values, dtype=float).tolist()):
+        state += gain * (value - state)  # y[n] = y[n-1] + gain (x[n] - y[n-1])
+        filtered[index] = state
+    return filtered
 
 
 def _record(step_times, positions, fingers, forces, reference: Reference, rate: float) -> Rollout:
