@@ -407,6 +407,8 @@ def optimize(
             prepared = resume_run(run_dir, iterations, file_task, given)
         else:
             task = file_task.with_overrides(**given)
+            if given["command"] is not None and task.backend != "command":
+                raise ConfigError(f"--command is for --backend command (the run's backend is {task.backend})")
             prepared = start_run(task, run_dir, lambda message: print(message, file=sys.stderr), inputs_record(file_task, given, task))
     again = f"stlopt optimize {task_file} --out {run_dir} --resume"
     with prepared, user_errors(on_interrupt=f"interrupted; the finished trials are kept. Continue with: {again}"):

@@ -322,6 +322,57 @@ CASES = [
     Case("report-out-is-file", ["report", "{run}", "--out", "{case}/f.txt"], 8, "is a file; the report folder must be a folder", {"f.txt": "x"}),
     Case("report-compare-missing", ["report", "{run}", "--out", "{case}/r", "--compare", "{case}/nope"], 9, "no such run directory"),
     Case("report-gp-parameter", ["report", "{run}", "--out", "{case}/r", "--gp-parameter", "mean[9].q"], 5, "is not a parameter of the run"),
+    # External executors, the safety gate, ask and tell
+    task_case("task-command-missing", "the command backend needs the command that executes a trial", backend="command"),
+    task_case("task-command-bad-key", "unknown key 'command.program'", backend="command", command="{program: x}"),
+    task_case("task-command-timeout", "'command.timeout' must be positive", backend="command", command="{run: x, timeout: 0}"),
+    task_case("task-command-quote", "cannot be split into arguments (No closing quotation)", backend="command", command='"run \'x"'),
+    task_case("task-command-shell-list", "a shell command must be one string", backend="command", command="{run: [a, b], shell: true}"),
+    task_case("task-command-empty", "the command is empty", backend="command", command="{run: ''}"),
+    task_case("optimize-command-other-backend", "--command is for --backend command", extra=["--command", "x"]),
+    task_case("optimize-command-timeout-alone", "--command-timeout needs a command", extra=["--command-timeout", "5"]),
+    Case("rollout-command-missing", ["rollout", "{model}", "--backend", "command"], 5, "the command backend needs a command"),
+    Case("rollout-command-other-backend", ["rollout", "{model}", "--command", "x"], 5, "--command is for --backend command"),
+    Case(
+        "rollout-command-not-found",
+        ["rollout", "{model}", "--backend", "command", "--command", "no-such-program-xyz {{reference}}"],
+        7,
+        "cannot start the command 'no-such-program-xyz' (No such file or directory)",
+    ),  # fmt: skip
+    Case(
+        "rollout-command-no-safety",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml", "--backend", "command", "--command", "x"],
+        7,
+        "the scene s declares no 'safety'",
+        {"s.yaml": "description: bare\n"},
+    ),  # fmt: skip
+    Case(
+        "rollout-command-unsafe",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml", "--backend", "command", "--command", "x"],
+        7,
+        "unsafe reference, not executed: at t = 0.000 s it reaches",
+        {"s.yaml": "description: x\nsafety: {workspace: {lower: [0, 0, 0], upper: [0.1, 0.1, 0.1]}, max_speed: 1}\n"},
+    ),  # fmt: skip
+    Case(
+        "scene-safety-inverted",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml"],
+        5,
+        "'safety': the workspace's lower corner [0.5, 0.0, 0.0] must be below",
+        {"s.yaml": "description: x\nsafety: {workspace: {lower: [0.5, 0, 0], upper: [0.4, 1, 1]}, max_speed: 1}\n"},
+    ),  # fmt: skip
+    Case(
+        "scene-safety-no-speed",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml"],
+        5,
+        "missing key 'safety.max_speed'",
+        {"s.yaml": "description: x\nsafety: {workspace: {lower: [0, 0, 0], upper: [1, 1, 1]}}\n"},
+    ),  # fmt: skip
+    Case("tell-nothing-pending", ["tell", "{run}", "{csv}"], 9, "no trial is pending; hand out the next one with: stlopt ask"),
+    Case("tell-no-signals", ["tell", "{run}"], 5, "give the signals CSV of the pending trial, or --failed REASON"),
+    Case("tell-missing-run", ["tell", "{case}/nope", "{csv}"], 9, "no such run directory"),
+    Case("ask-run-with-seed", ["ask", "{run}", "--seed", "3"], 5, "a run directory keeps its own settings"),
+    Case("ask-not-a-run", ["ask", "{case}"], 9, "not a run directory of stlopt optimize"),
+    Case("ask-task-missing", ["ask", "{case}/nope.yaml", "--out", "{case}/out"], 5, "no such YAML file"),
 ]
 
 

@@ -28,8 +28,8 @@ from stl_lfd.optim.rundir import SIGNALS_DIR, Pending, RunDirectory, StagedRun, 
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Task
 from stl_lfd.signals import read_signal_csv, write_signal_csv
-from stl_lfd.sim import Reference, UnsafeReference, check_reference, exchange_folder, read_reference_csv, write_reference_csv
-from stl_lfd.sim.command import EXECUTIONS_DIR, check_coverage, tracking_error
+from stl_lfd.sim import Reference, UnsafeReference, exchange_folder, read_reference_csv, write_reference_csv
+from stl_lfd.sim.command import EXECUTIONS_DIR, check_coverage, gate, tracking_error
 
 REFERENCE_FILE = "reference.csv"
 
@@ -63,7 +63,7 @@ def ask_new(task: Task, out: Path, inputs: dict[str, Any], learn_progress: Calla
     models = task_models(task)
     _, objective = objective_for(task, models, execute=False)
     reference = objective.reference(models)
-    _check_safety(objective, reference)  # nothing to record a refusal in yet: an error
+    gate(reference, objective.scene)  # nothing to record a refusal in yet: an error
     with StagedRun(out) as staged:
         write_reference_csv(reference, _reference_path(staged.path, 0), objective.scene.gripper_opening)
         run = staged.commit(task, models, None, None, inputs, Pending(0, "initial", None, 0.0, time.time()))
@@ -100,7 +100,7 @@ def ask(
             number = len(recorder.history) + 1
             try:
                 reference = objective.reference(prepared.space.apply(prepared.models, x))
-                _check_safety(objective, reference)
+                gate(reference, objective.scene)
             except ExecutionError as error:  # unsafe, or no reference at all: a failed trial, as optimise records it
                 seconds = time.perf_counter() - start
                 trial = Trial(number, phase, x, None, "failed", str(error), optimizer_seconds=seconds)
@@ -203,13 +203,6 @@ def _check_follows(signals: Any, reference: Reference, errors: np.ndarray, toler
                 f"{signals.source}: these signals follow the reference of {folder.name} (worst error {1000 * other_errors.max():.1f} mm), "
                 f"not that of the pending trial {trial} ({1000 * errors.max():.1f} mm); tell the signals of trial {trial}"
             )
-
-
-def _check_safety(objective: SkillObjective, reference: Reference) -> None:
-    scene = objective.scene
-    if scene.safety is None:
-        raise ExecutionError(f"the scene {scene.name} declares no 'safety' (workspace and max_speed), which references need before they leave stlopt")
-    check_reference(reference, scene.safety)
 
 
 def _live_pending(run: RunDirectory) -> Pending | None:

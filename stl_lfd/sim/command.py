@@ -123,9 +123,7 @@ class CommandBackend:
 
     def run(self, reference: Reference, scene: Scene, rate: float, observer: Callable | None = None) -> Rollout:
         """Check `reference`, hand it to the command, and return the signals it recorded."""
-        if scene.safety is None:
-            raise ExecutionError(f"the scene {scene.name} declares no 'safety' (workspace and max_speed), which references need before they leave stlopt")
-        check_reference(reference, scene.safety)
+        gate(reference, scene)
         with self._exchange() as folder:
             reference_path, signals_path = folder / "reference.csv", folder / "signals.csv"
             write_reference_csv(reference, reference_path, scene.gripper_opening)
@@ -166,6 +164,18 @@ class CommandBackend:
 
     def __exit__(self, *exception: object) -> None:
         self.close()
+
+
+def gate(reference: Reference, scene: Scene) -> None:
+    """The safety gate every reference passes before it leaves stlopt: the scene's limits.
+
+    Raises:
+        UnsafeReference: outside the workspace or too fast (see `check_reference`).
+        ExecutionError: the scene declares no limits.
+    """
+    if scene.safety is None:
+        raise ExecutionError(f"the scene {scene.name} declares no 'safety' (workspace and max_speed), which references need before they leave stlopt")
+    check_reference(reference, scene.safety)
 
 
 def run_command(command: Command, values: dict[str, str], folder: Path) -> None:
