@@ -513,6 +513,62 @@ def tell(
 
 
 @app.command(cls=_PlainUsage)
+def sweep(
+    sweep_file: Path = typer.Argument(..., metavar="SWEEP_FILE", help="Sweep file (YAML): tasks, methods, seeds, variants."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Sweep folder (default: sweeps/<sweep name>)."),
+    jobs: int = typer.Option(1, "--jobs", "-j", min=1, help="Cells run at once by local worker processes."),
+    ray: Optional[str] = typer.Option(None, "--ray", help="Run the cells as Ray tasks: 'auto' (this machine's cluster) or a cluster address."),
+) -> None:
+    """Run a grid of optimisations and print the table of their results.
+
+    Every cell (task x variant x method x seed) is an ordinary run directory in SWEEP/runs/;
+    sweep.csv has one row per cell and sweep.png compares the methods. Cells already finished
+    in the folder are skipped, so a killed sweep continues where it stopped. The table
+    (success rate, median trials to the first satisfaction, median best robustness, wall time
+    per run) goes to stdout.
+
+    Examples:
+
+    \b
+        stlopt sweep sweeps/phi1_methods.yaml --jobs 2
+        stlopt sweep sweeps/phi1_methods.yaml --ray auto
+    """
+    from stl_lfd.files import check_output_folder
+    from stl_lfd.optim.sweep import load_sweep, local_results, ray_results, run_sweep
+    from stl_lfd.report.sweep import TABLE_HEADER, sweep_groups, table_rows, write_sweep_figure
+
+    with user_errors():
+        plan = load_sweep(sweep_file)
+        folder = check_output_folder(out or Path("sweeps") / plan.name, "sweep folder")
+        results = (lambda cells: ray_results(cells, ray)) if ray is not None else (lambda cells: local_results(cells, jobs))
+        again = f"stlopt sweep {sweep_file}" + (f" --out {out}" if out else "")
+        with _progress_bar(f"sweep {plan.name}", len(plan.cells)) as advance, user_errors(on_interrupt=f"interrupted; finished cells are kept. Continue with: {again}"):
+
+            def finished(result, done: int, total: int) -> None:
+                advance(done)
+                if result is not None:
+                    record = result.record
+                    verdict = f"satisfied at trial {record['first_satisfied_trial']}" if record["satisfied"] else "not satisfied"
+                    best = f"{record['best_robustness']:+.5f}" if record["best_robustness"] is not None else "-"
+                    print(f"{result.name}: {verdict}, best {best} ({record['wall_seconds']:.0f} s)", file=sys.stderr)
+                elif done:
+                    print(f"{done} of {total} cells already done in {folder}", file=sys.stderr)
+
+            run_sweep(plan, folder, results, finished)
+        figure = write_sweep_figure(folder)
+        groups = sweep_groups(folder)
+    _print_table(TABLE_HEADER, table_rows(groups))
+    print(f"wrote {folder / 'sweep.csv'} and {figure}", file=sys.stderr)
+
+
+def _print_table(header: list[str], rows: list[list[str]]) -> None:
+    """A plain table on stdout: columns padded to their widest cell."""
+    widths = [max(len(str(row[column])) for row in [header, *rows]) for column in range(len(header))]
+    for row in [header, *rows]:
+        print("  ".join(str(cell).ljust(width) for cell, width in zip(row, widths)).rstrip())
+
+
+@app.command(cls=_PlainUsage)
 def report(
     run_dir: Path = typer.Argument(..., metavar="RUN_DIR", help="Run directory written by 'stlopt optimize'."),
     out: Optional[Path] = typer.Option(None, "--out", help="Folder for the figures and index.html (default: RUN_DIR/report)."),

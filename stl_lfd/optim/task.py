@@ -197,8 +197,12 @@ def _parameters_to_yaml(parameters: Parameters) -> dict[str, Any]:
 
 def load_task(path: str | Path) -> Task:
     """Read and validate a task file."""
-    path = Path(path)
-    data = read_yaml(path)
+    return parse_task(read_yaml(path), Path(path))
+
+
+def parse_task(data: dict[str, Any], path: Path) -> Task:
+    """Validate the mapping of a task file; relative paths in it start at `path`'s folder, and
+    errors name `path` (a sweep parses task files with its overrides merged in this way)."""
     check_keys(data, TOP_KEYS, path, required=("spec", "duration"))
     if sum(key in data for key in ("model", "demos", "behaviour")) != 1:
         raise ConfigError(f"{path}: give exactly one of 'model' (a model file), 'demos' (a folder to learn from) or 'behaviour' (a behaviour file)")
