@@ -14,12 +14,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import multiprocessing
 import statistics
 import tempfile
 import time
 import warnings
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -29,10 +27,10 @@ from rich.table import Table
 from benchmarks._timing import Row, print_table
 from stl_lfd.optim import load_task, optimise, start_run
 from stl_lfd.optim.acquisition import propose
+from stl_lfd.optim.sweep import local_map
 
 ROOT = Path(__file__).resolve().parent.parent
 # Workers are spawned, not forked: forking after torch or pybullet started threads deadlocks.
-SPAWN = multiprocessing.get_context("spawn")
 METHODS = ("stl", "pi", "logei", "random")
 
 
@@ -68,8 +66,8 @@ def one_run(arguments: tuple[str, str, str, str, int]) -> dict:
 
 def comparison(backend: str, seeds: int, semantics: str, workers: int = 2) -> list[dict]:
     jobs = [(spec, method, semantics, backend, seed) for spec in ("phi1", "phi2") for method in METHODS for seed in range(seeds)]
-    with ProcessPoolExecutor(workers, mp_context=SPAWN) as pool:
-        return list(pool.map(one_run, jobs))
+    results = dict(local_map(one_run, jobs, workers))
+    return [results[job] for job in jobs]
 
 
 def print_comparison(results: list[dict], backend: str, semantics: str) -> None:

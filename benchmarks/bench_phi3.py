@@ -10,10 +10,8 @@ About 4 minutes per spec on 2 cores (two runs side by side).
 from __future__ import annotations
 
 import argparse
-import multiprocessing
 import tempfile
 import warnings
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +19,7 @@ from rich.console import Console
 from rich.table import Table
 
 from stl_lfd.optim import RunDirectory, load_task, optimise, start_run
+from stl_lfd.optim.sweep import local_map
 from stl_lfd.report.figures import followed_states
 from stl_lfd.signals import read_signal_csv
 from stl_lfd.stl import load_spec
@@ -28,7 +27,6 @@ from stl_lfd.stl.regions import region_boxes
 
 ROOT = Path(__file__).resolve().parent.parent
 # Workers are spawned, not forked: forking after torch or pybullet started threads deadlocks.
-SPAWN = multiprocessing.get_context("spawn")
 
 
 def inside(table, box) -> np.ndarray:
@@ -64,8 +62,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seeds", type=int, default=5)
     args = parser.parse_args(argv)
     jobs = [(spec, seed) for spec in args.specs.split(",") for seed in range(args.seeds)]
-    with ProcessPoolExecutor(2, mp_context=SPAWN) as pool:
-        results = list(pool.map(one_run, jobs))
+    finished = dict(local_map(one_run, jobs, 2))
+    results = [finished[job] for job in jobs]
     table = Table(title="phi3 over seeds (pybullet, 16 trials: 8 Sobol + PI)", title_justify="left")
     for column in ("spec", "seed", "satisfied", "first", "peak force before → after (N)", "pick at shaft before → after (s)", "pick states", "time"):
         table.add_column(column)

@@ -23,20 +23,19 @@ import os
 import statistics
 import time
 import warnings
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from stl_lfd.optim.sweep import local_map
+
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS_DIR = ROOT / "benchmarks" / "problems"
 RESULTS = ROOT / "benchmarks" / "results" / "suite.jsonl"
 SEARCH_RESULTS = ROOT / "benchmarks" / "results" / "search.jsonl"
 METHODS = ("stl", "pi", "logei", "random", "tpe")
-# Workers are spawned, not forked: forking after torch or pybullet started threads deadlocks.
-SPAWN = multiprocessing.get_context("spawn")
 TPE_STARTUP = 10  # Optuna's default n_startup_trials: random points before TPE proposes
 
 
@@ -193,23 +192,29 @@ def _append(path: Path, record: dict) -> None:
         stream.write(json.dumps(record) + "\n")
 
 
+def _run_safely(job: tuple[str, str, int]) -> dict:
+    try:
+        return run_one(*job)
+    except Exception as error:
+        return {"error": f"{type(error).__name__}: {error}"}
+
+
+def _search(job: tuple[str, int]) -> dict:
+    return random_search(*job)
+
+
 def run_suite(problems: list[str], methods: list[str], seeds: list[int], jobs: int) -> None:
     done = {(r["problem"], r["method"], r["seed"]) for r in _recorded(RESULTS)}
     # seed by seed, so that a suite stopped early has whole seeds for every problem and method
     todo = [(p, m, s) for s in seeds for p in problems for m in methods if (p, m, s) not in done]
     console = Console(stderr=True)
     console.print(f"{len(todo)} runs to do ({len(done)} recorded)")
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=SPAWN) as pool:
-        futures = {pool.submit(run_one, *job): job for job in todo}
-        for count, future in enumerate(as_completed(futures), start=1):
-            job = futures[future]
-            try:
-                record = future.result()
-            except Exception as error:  # one broken run must not lose the others
-                console.print(f"[red]{job} failed: {error}")
-                continue
-            _append(RESULTS, record)
-            console.print(f"{count}/{len(todo)} {job}: first satisfied {record['first_satisfied']}, best {record['best_robustness']:.4f}")
+    for count, (job, record) in enumerate(local_map(_run_safely, todo, jobs), start=1):
+        if "error" in record:  # one broken run must not lose the others
+            console.print(f"[red]{job} failed: {record['error']}")
+            continue
+        _append(RESULTS, record)
+        console.print(f"{count}/{len(todo)} {job}: first satisfied {record['first_satisfied']}, best {record['best_robustness']:.4f}")
 
 
 def summarise(problems: list[str], methods: list[str], seeds: list[int] | None = None) -> list[dict]:
@@ -286,10 +291,9 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     if args.search:
-        with ProcessPoolExecutor(max_workers=args.jobs, mp_context=SPAWN) as pool:
-            for record in pool.map(random_search, args.problems, [args.search] * len(args.problems)):
-                _append(SEARCH_RESULTS, record)
-                Console(stderr=True).print(record)
+        for _, record in local_map(_search, [(problem, args.search) for problem in args.problems], args.jobs):
+            _append(SEARCH_RESULTS, record)
+            Console(stderr=True).print(record)
     elif not args.table:
         run_suite(args.problems, args.methods, seeds, args.jobs)
     print_table(args.problems, args.methods, seeds, args.markdown)

@@ -542,7 +542,10 @@ def sweep(
         folder = check_output_folder(out or Path("sweeps") / plan.name, "sweep folder")
         results = (lambda cells: ray_results(cells, ray)) if ray is not None else (lambda cells: local_results(cells, jobs))
         again = f"stlopt sweep {sweep_file}" + (f" --out {out}" if out else "")
-        with _progress_bar(f"sweep {plan.name}", len(plan.cells)) as advance, user_errors(on_interrupt=f"interrupted; finished cells are kept. Continue with: {again}"):
+        with (
+            _progress_bar(f"sweep {plan.name}", len(plan.cells)) as advance,
+            user_errors(on_interrupt=f"interrupted; finished cells are kept. Continue with: {again}"),
+        ):
 
             def finished(result, done: int, total: int) -> None:
                 advance(done)
@@ -570,7 +573,7 @@ def _print_table(header: list[str], rows: list[list[str]]) -> None:
 
 @app.command(cls=_PlainUsage)
 def report(
-    run_dir: Path = typer.Argument(..., metavar="RUN_DIR", help="Run directory written by 'stlopt optimize'."),
+    run_dir: Path = typer.Argument(..., metavar="RUN_DIR", help="Run directory written by 'stlopt optimize' (or a sweep folder)."),
     out: Optional[Path] = typer.Option(None, "--out", help="Folder for the figures and index.html (default: RUN_DIR/report)."),
     compare: list[Path] = typer.Option([], "--compare", help="Another run directory to compare best-so-far robustness with (repeatable)."),
     gp_parameter: list[str] = typer.Option(
@@ -581,7 +584,8 @@ def report(
 
     Figures: end-effector paths, signed distance to each region in its time window,
     robustness per trial, GP slices, transition graphs before/after, duration means per
-    trial, and contact forces (when recorded). The paths of the files go to stdout.
+    trial, and contact forces (when recorded). The paths of the files go to stdout. For a
+    folder of 'stlopt sweep': its table (stdout) and sweep.png, redrawn from its runs.
 
     Example:
 
@@ -590,12 +594,27 @@ def report(
     """
     from stl_lfd.report import write_report
 
+    if (run_dir / "sweep.csv").is_file() and not (run_dir / "trials.jsonl").exists():
+        _report_sweep(run_dir, out, bool(compare or gp_parameter))
+        return
     with user_errors():
         index, pictures = write_report(run_dir, out, compare, gp_parameter or None)
     for path in pictures:
         print(path)
     print(index)
     print(f"wrote {len(pictures)} figures; open {index}", file=sys.stderr)
+
+
+def _report_sweep(folder: Path, out: Optional[Path], run_options: bool) -> None:
+    from stl_lfd.report.sweep import TABLE_HEADER, sweep_groups, table_rows, write_sweep_figure
+
+    with user_errors():
+        if out is not None or run_options:
+            raise ConfigError(f"{folder}: a sweep folder's report is its table and sweep.png; --out, --compare and --gp-parameter are for run directories")
+        figure = write_sweep_figure(folder)
+        groups = sweep_groups(folder)
+    _print_table(TABLE_HEADER, table_rows(groups))
+    print(f"wrote {figure}", file=sys.stderr)
 
 
 @contextmanager

@@ -215,45 +215,57 @@ def cell_record(cell: Cell, run_dir: Path) -> dict[str, Any]:
     }  # fmt: skip
 
 
-def local_results(cells: Iterable[Cell], jobs: int) -> Iterator[CellResult]:
-    """Cells run by `jobs` spawned worker processes (forking after torch or pybullet started
-    threads can deadlock), in the order they finish."""
+def local_map(function: Callable[[Any], Any], items: Iterable[Any], jobs: int) -> Iterator[tuple[Any, Any]]:
+    """`(item, function(item))` for each item, computed by `jobs` spawned worker processes of
+    one thread each (forking after torch or pybullet started threads can deadlock), in the
+    order they finish. `function` must be importable by the workers (a module-level function)."""
     import multiprocessing
 
-    cells = list(cells)
-    if not cells:
+    items = list(items)
+    if not items:
         return
     with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"), initializer=_one_thread) as pool:
-        futures = [pool.submit(run_cell, cell) for cell in cells]
+        futures = {pool.submit(function, item): item for item in items}
         try:
             for future in as_completed(futures):
-                yield future.result()
+                yield futures[future], future.result()
         except BaseException:
             for future in futures:
                 future.cancel()
             raise
 
 
-def ray_results(cells: Iterable[Cell], address: str | None) -> Iterator[CellResult]:
-    """Cells run as Ray tasks of one CPU each, in the order they finish. `address`: `auto` (the
-    cluster this machine belongs to), a cluster's address, or None for a Ray already
-    initialised by the caller (or a local one)."""
+def ray_map(function: Callable[[Any], Any], items: Iterable[Any], address: str | None) -> Iterator[tuple[Any, Any]]:
+    """`(item, function(item))` for each item, computed by Ray tasks of one CPU each, in the
+    order they finish. `address`: `auto` (the cluster this machine belongs to), a cluster's
+    address, or None for a Ray already initialised by the caller (or a new local one)."""
     try:
         import ray
     except ImportError:
         raise ConfigError("--ray needs Ray: pip install 'stlopt[ray]'") from None
     if not ray.is_initialized():
         ray.init(address=address, runtime_env={"env_vars": {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}}, log_to_driver=False)
-    remote = ray.remote(num_cpus=1)(run_cell)
-    pending = [remote.remote(cell) for cell in cells]
+    remote = ray.remote(num_cpus=1)(function)
+    pending = {remote.remote(item): item for item in items}
     try:
         while pending:
-            done, pending = ray.wait(pending, num_returns=1)
-            yield ray.get(done[0])
+            done, _ = ray.wait(list(pending), num_returns=1)
+            item = pending.pop(done[0])
+            yield item, ray.get(done[0])
     except BaseException:
         for reference in pending:
             ray.cancel(reference, force=True)
         raise
+
+
+def local_results(cells: Iterable[Cell], jobs: int) -> Iterator[CellResult]:
+    """The cells run by `jobs` local worker processes, in the order they finish."""
+    return (result for _, result in local_map(run_cell, cells, jobs))
+
+
+def ray_results(cells: Iterable[Cell], address: str | None) -> Iterator[CellResult]:
+    """The cells run as Ray tasks (see `ray_map`), in the order they finish."""
+    return (result for _, result in ray_map(run_cell, cells, address))
 
 
 def _one_thread() -> None:
@@ -298,7 +310,9 @@ def _finished(cell: Cell, run_dir: Path) -> bool:
 
     run = RunDirectory.open(run_dir)
     if _plain_json(run.inputs()) != _plain_json(cell.inputs):
-        raise RunError(f"{run_dir}: holds another run than the sweep's cell {cell.name} (other task settings or inputs); remove it or sweep into another folder")
+        raise RunError(
+            f"{run_dir}: holds another run than the sweep's cell {cell.name} (other task settings or inputs); remove it or sweep into another folder"
+        )
     return run.summary().complete
 
 
