@@ -40,8 +40,8 @@ test-fast: $(STAMP) lint
 	$(PYTEST) -m "not slow"
 
 lint: $(STAMP)
-	$(BIN)/ruff check stl_lfd tests benchmarks
-	$(BIN)/ruff format --check stl_lfd tests benchmarks
+	$(BIN)/ruff check stl_lfd tests benchmarks examples
+	$(BIN)/ruff format --check stl_lfd tests benchmarks examples
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks

@@ -515,7 +515,7 @@ def tell(
 @app.command(cls=_PlainUsage)
 def sweep(
     sweep_file: Path = typer.Argument(..., metavar="SWEEP_FILE", help="Sweep file (YAML): tasks, methods, seeds, variants."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Sweep folder (default: sweeps/<sweep name>)."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Sweep folder (default: runs/<sweep name>)."),
     jobs: int = typer.Option(1, "--jobs", "-j", min=1, help="Cells run at once by local worker processes."),
     ray: Optional[str] = typer.Option(None, "--ray", help="Run the cells as Ray tasks: 'auto' (this machine's cluster) or a cluster address."),
 ) -> None:
@@ -539,7 +539,7 @@ def sweep(
 
     with user_errors():
         plan = load_sweep(sweep_file)
-        folder = check_output_folder(out or Path("sweeps") / plan.name, "sweep folder")
+        folder = check_output_folder(out or Path("runs") / plan.name, "sweep folder")
         results = (lambda cells: ray_results(cells, ray)) if ray is not None else (lambda cells: local_results(cells, jobs))
         again = f"stlopt sweep {sweep_file}" + (f" --out {out}" if out else "")
         with (

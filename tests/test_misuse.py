@@ -373,6 +373,38 @@ CASES = [
     Case("ask-run-with-seed", ["ask", "{run}", "--seed", "3"], 5, "a run directory keeps its own settings"),
     Case("ask-not-a-run", ["ask", "{case}"], 9, "not a run directory of stlopt optimize"),
     Case("ask-task-missing", ["ask", "{case}/nope.yaml", "--out", "{case}/out"], 5, "no such YAML file"),
+    # Sweeps
+    Case("sweep-missing", ["sweep", "{case}/nope.yaml", "--out", "{case}/out"], 5, "no such YAML file"),
+    Case("sweep-unknown-key", ["sweep", "{case}/s.yaml", "--out", "{case}/out"], 5, "unknown key 'jobs'", {"s.yaml": "tasks: [t.yaml]\njobs: 2\n"}),
+    Case(
+        "sweep-task-missing",
+        ["sweep", "{case}/s.yaml", "--out", "{case}/out"],
+        5,
+        "'tasks' names t.yaml, which does not exist",
+        {"s.yaml": "tasks: [t.yaml]\n"},
+    ),
+    Case(
+        "sweep-bad-task",
+        ["sweep", "{case}/s.yaml", "--out", "{case}/out"],
+        5,
+        "'duration' must be positive",
+        {"s.yaml": "tasks: [t.yaml]\n", "t.yaml": task_text(duration="0")},
+    ),  # fmt: skip
+    Case(
+        "sweep-bad-seeds",
+        ["sweep", "{case}/s.yaml", "--out", "{case}/out"],
+        5,
+        "'seeds' must be at least 0",
+        {"s.yaml": "tasks: [t.yaml]\nseeds: [1, -2]\n", "t.yaml": task_text()},
+    ),  # fmt: skip
+    Case(
+        "sweep-out-is-file",
+        ["sweep", "{case}/s.yaml", "--out", "{case}/f.txt"],
+        8,
+        "is a file; the sweep folder must be a folder",
+        {"s.yaml": "tasks: [t.yaml]\n", "t.yaml": task_text(), "f.txt": "x"},
+    ),  # fmt: skip
+    Case("report-sweep-options", ["report", "{case}", "--out", "{case}/r"], 5, "a sweep folder's report is its table and sweep.png", {"sweep.csv": "cell\n"}),
 ]
 
 

@@ -25,7 +25,7 @@ from tests.conftest import ROOT
 
 NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?:\.\.\.)?")
 DURATION_AFTER = re.compile(r"^ ?(s\b|x real time)")
-SLOW_COMMANDS = ("stlopt optimize", "stlopt replay")
+SLOW_COMMANDS = ("stlopt optimize", "stlopt replay", "stlopt sweep")
 
 
 @dataclass
@@ -113,6 +113,9 @@ def scratch(tmp_path_factory) -> Path:
     folder = tmp_path_factory.mktemp("readme")
     for name in ("specs", "examples", "demos", "configs"):
         (folder / name).symlink_to(ROOT / name)
+    (folder / "sweeps").mkdir()  # sweep files only: a sweep's output must not land in the repository
+    for path in (ROOT / "sweeps").glob("*.yaml"):
+        (folder / "sweeps" / path.name).symlink_to(path)
     return folder
 
 
@@ -125,7 +128,7 @@ _done: dict[int, subprocess.CompletedProcess] = {}
 
 def _run_up_to(index: int, folder: Path) -> subprocess.CompletedProcess:
     """Run example `index` after every earlier one that is not slow (examples use the files
-    earlier ones wrote; the slow ones, a full optimisation and a filmed replay, write nothing
+    earlier ones wrote; the slow ones, a full optimisation, a filmed replay and a sweep, write nothing
     a later example reads)."""
     for earlier in range(index + 1):
         if earlier not in _done and (earlier == index or not _is_slow(EXAMPLES[earlier])):

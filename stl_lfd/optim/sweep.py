@@ -4,7 +4,7 @@ ordinary run directory, executed by a local process pool or by Ray tasks.
 A sweep file (YAML, e.g. `sweeps/phi1_methods.yaml`; paths relative to it):
 
 ```
-name: phi1-methods          # the default folder: sweeps/<name>
+name: phi1-methods          # the default folder: runs/<name>
 tasks: [../configs/phi1.yaml]
 methods: [stl, random]      # default: each task's own method
 seeds: 4                    # seeds 0-3, or a list [0, 5, 7]

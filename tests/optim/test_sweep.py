@@ -17,7 +17,19 @@ from stl_lfd.optim.sweep import aggregate, load_sweep, local_results, merged, re
 
 ROOT = Path(__file__).resolve().parents[2]
 runner = CliRunner()
-COMPARED = ("cell", "task", "variant", "method", "seed", "satisfied", "first_satisfied_trial", "best_robustness", "initial_robustness", "trials", "failed_trials")
+COMPARED = (
+    "cell",
+    "task",
+    "variant",
+    "method",
+    "seed",
+    "satisfied",
+    "first_satisfied_trial",
+    "best_robustness",
+    "initial_robustness",
+    "trials",
+    "failed_trials",
+)
 
 
 def task_file(folder, model_file):
