@@ -379,6 +379,7 @@ def optimize(
     ),
     command: Optional[str] = typer.Option(None, "--command", help=COMMAND_HELP),
     command_timeout: Optional[float] = typer.Option(None, "--command-timeout", help=COMMAND_TIMEOUT_HELP),
+    workers: Optional[int] = typer.Option(None, "--workers", help="Trials run at once, each batch proposed together (default: the task's, or 1)."),
 ) -> None:
     """Optimise a skill so that its execution satisfies the task's STL specification.
 
@@ -398,7 +399,9 @@ def optimize(
     from stl_lfd.optim.resume import inputs_record
     from stl_lfd.progress import TrialPrinter
 
-    given = dict(spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None)
+    given = dict(
+        spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None, workers=workers
+    )  # fmt: skip
     with user_errors():
         file_task = load_task(task_file)
         given["command"] = _command(command, command_timeout, file_task.command)

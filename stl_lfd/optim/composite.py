@@ -69,8 +69,10 @@ def trust_region_length(Y: np.ndarray, initial: int, region: TrustRegion = Trust
     return length
 
 
-def propose_composite(X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarray, semantics: Semantics, initial: int, seed: int) -> np.ndarray:
-    """The next point of composite BO.
+def propose_composite(
+    X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarray, semantics: Semantics, initial: int, seed: int, count: int = 1
+) -> np.ndarray:
+    """The next point (or batch of `count` points) of composite BO.
 
     Args:
         X: `n x d` observed points, in trial order.
@@ -80,27 +82,38 @@ def propose_composite(X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: n
         semantics: how the parts compose.
         initial: how many of the first trials were the space-filling design.
         seed: seeds the Monte Carlo samples and the acquisition optimiser's starts.
+        count: points to propose at once, for parallel trials. Each point after the first is
+            chosen with the earlier ones pending: as if observed at their posterior mean (the
+            "Kriging believer", which leaves the mean unchanged and shrinks the variance around
+            them), with the same GP hyperparameters.
 
     Returns:
-        `d` next point.
+        `d` next point, or `count x d` points when `count > 1`.
     """
     with single_threaded():
-        return _maximise(X, parts, Y, bounds, semantics, initial, seed)
+        points = _maximise(X, parts, Y, bounds, semantics, initial, seed, count)
+    return points[0] if count == 1 else points
 
 
-def _maximise(X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarray, semantics: Semantics, initial: int, seed: int) -> np.ndarray:
+def _maximise(X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarray, semantics: Semantics, initial: int, seed: int, count: int) -> np.ndarray:
     import torch
 
     torch.manual_seed(seed)
     unit = (X - bounds[0]) / (bounds[1] - bounds[0])
     model = fit_multi_output_gp(unit, parts)
-    acquisition = composed_log_ei(model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed)
+    posterior = PartsPosterior(model)
     box = _trust_box(unit[int(np.argmax(Y))], trust_region_length(Y, initial))
-    point = bounds[0] + maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed) * (bounds[1] - bounds[0])
-    return np.clip(point, bounds[0], bounds[1])
+    chosen: list[np.ndarray] = []
+    for index in range(count):
+        if chosen:
+            posterior = posterior.with_pending(torch.as_tensor(np.array(chosen), dtype=torch.float64))
+        acquisition = composed_log_ei(model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed + index, posterior)
+        chosen.append(maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed + index))
+    points = bounds[0] + np.array(chosen) * (bounds[1] - bounds[0])
+    return np.clip(points, bounds[0], bounds[1])
 
 
-def composed_log_ei(model, best: float, scale: float, semantics: Semantics, parts: int, seed: int):
+def composed_log_ei(model, best: float, scale: float, semantics: Semantics, parts: int, seed: int, posterior: "PartsPosterior | None" = None):
     """Log expected improvement of the composed robustness over `best`, by quasi-Monte Carlo.
 
     The parts' GPs are independent, so at one point their joint posterior is `m` independent
@@ -121,7 +134,7 @@ def composed_log_ei(model, best: float, scale: float, semantics: Semantics, part
     unit = SobolEngine(parts, scramble=True, seed=seed).draw(MC_SAMPLES, dtype=torch.float64)
     normal = torch.distributions.Normal(0.0, 1.0).icdf(unit.clamp(1e-6, 1 - 1e-6))  # S x m
     temperature = 0.01 * scale
-    posterior = PartsPosterior(model)
+    posterior = posterior if posterior is not None else PartsPosterior(model)
 
     class ComposedLogEI(AcquisitionFunction):
         def forward(self, X):  # b x 1 x d -> b
@@ -143,6 +156,7 @@ class PartsPosterior:
     def __init__(self, model) -> None:
         import torch
 
+        self.pending = None
         with torch.no_grad():
             outputs = model.num_outputs  # a one-output model has no batch dimension: add it
             inputs = model.train_inputs[0].reshape(outputs, -1, model.train_inputs[0].shape[-1])  # m x n x d
@@ -158,6 +172,21 @@ class PartsPosterior:
             self.constant = constant
             self.y_mean = model.outcome_transform.means.detach()[0]  # m
             self.y_std = model.outcome_transform.stdvs.detach()[0]  # m
+            self.noise = noise
+
+    def with_pending(self, pending) -> "PartsPosterior":
+        """This posterior with `p x d` pending points (unit cube) observed at their posterior
+        mean: the mean is unchanged, the variance is that of the training and pending inputs."""
+        import copy
+
+        import torch
+
+        extended = copy.copy(self)
+        with torch.no_grad():
+            inputs = torch.cat([self.inputs, (pending.unsqueeze(0) / self.lengthscale)], dim=-2)  # m x (n + p) x d
+            kernel = self._kernel(inputs, inputs) + self.noise[..., None] * torch.eye(inputs.shape[-2], dtype=inputs.dtype)
+            extended.pending = (inputs, torch.linalg.cholesky(kernel))
+        return extended
 
     @staticmethod
     def _kernel(a, b):
@@ -173,7 +202,10 @@ class PartsPosterior:
         scaled = X.unsqueeze(0) / self.lengthscale  # m x b x d
         cross = self._kernel(scaled, self.inputs)  # m x b x n
         mean = self.constant[:, None] + (cross @ self.weights)[..., 0]  # m x b
-        solved = torch.linalg.solve_triangular(self.cholesky, cross.transpose(-1, -2), upper=False)  # m x n x b
+        inputs, cholesky = self.pending if self.pending is not None else (self.inputs, self.cholesky)
+        if self.pending is not None:
+            cross = self._kernel(scaled, inputs)  # m x b x (n + p)
+        solved = torch.linalg.solve_triangular(cholesky, cross.transpose(-1, -2), upper=False)  # m x n x b
         variance = (1.0 - solved.square().sum(dim=-2)).clamp_min(1e-12)  # m x b
         return (mean * self.y_std[:, None] + self.y_mean[:, None]).T, (variance.sqrt() * self.y_std[:, None]).T
 

@@ -16,6 +16,7 @@ from typing import Callable
 
 import numpy as np
 
+from stl_lfd.errors import ConfigError
 from stl_lfd.optim.acquisition import propose, random_point, sobol_points
 from stl_lfd.optim.task import Optimizer
 from stl_lfd.stl import SpecParts
@@ -70,20 +71,49 @@ class Outcome:
 def next_point(history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None = None) -> tuple[np.ndarray, str]:
     """The point of trial `len(history) + 1` and the phase that chose it; method `stl` models
     each of `parts`, the spec's top-level conjuncts."""
+    return next_points(history, bounds, optimizer, parts)[0]
+
+
+def next_points(history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None = None) -> list[tuple[np.ndarray, str]]:
+    """The points (and phases) of the trials from `len(history) + 1` to the end of its batch.
+
+    Trials run in batches of `optimizer.workers`: the M initial trials in batches of their own,
+    then batches proposed together from the history before the batch. A batch depends only on
+    that history, the seed and its first trial's number, so a run resumed in the middle of a
+    batch proposes the rest of it exactly as an uninterrupted run did. With one worker every
+    batch is one trial.
+    """
     index = len(history)
+    start, end = batch_of(index, optimizer)
     if index < optimizer.initial:
-        return sobol_points(bounds, optimizer.initial, optimizer.seed)[index], "sobol"
+        return [(point, "sobol") for point in sobol_points(bounds, optimizer.initial, optimizer.seed)[index:end]]
     if optimizer.method == "random":
-        return random_point(bounds, optimizer.seed, index), "random"
-    X, Y = observations(history)
+        return [(random_point(bounds, optimizer.seed, trial), "random") for trial in range(index, end)]
+    before = history[:start]
+    X, Y = observations(before)
     if len(Y) == 0 or np.ptp(Y) == 0:  # every trial so far failed, or all gave the same value: nothing to model yet
-        return random_point(bounds, optimizer.seed, index), "random"
+        return [(random_point(bounds, optimizer.seed, trial), "random") for trial in range(index, end)]
     if optimizer.method == "stl":
-        return _composite_point(history, X, Y, bounds, optimizer, parts), "stl"
-    return propose(X, Y, bounds, optimizer.method, optimizer.xi, optimizer.seed + index), optimizer.method
+        points = _composite_points(before, X, Y, bounds, optimizer, parts, end - start)
+        return [(point, "stl") for point in points[index - start :]]
+    if end - start > 1:
+        raise ConfigError(f"method {optimizer.method} proposes one trial at a time: use method stl or random with workers > 1")
+    return [(propose(X, Y, bounds, optimizer.method, optimizer.xi, optimizer.seed + index), optimizer.method)]
 
 
-def _composite_point(history: list[Trial], X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None) -> np.ndarray:
+def batch_of(index: int, optimizer: Optimizer) -> tuple[int, int]:
+    """The 0-based trial indices `[start, end)` of the batch holding trial index `index`."""
+    workers = optimizer.workers
+    if index < optimizer.initial:
+        start = index - index % workers
+        return start, min(start + workers, optimizer.initial)
+    start = index - (index - optimizer.initial) % workers
+    return start, min(start + workers, optimizer.trials)
+
+
+def _composite_points(
+    history: list[Trial], X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None, count: int
+) -> np.ndarray:
     from stl_lfd.optim.composite import propose_composite
     from stl_lfd.stl import Semantics
 
@@ -91,7 +121,8 @@ def _composite_point(history: list[Trial], X: np.ndarray, Y: np.ndarray, bounds:
     semantics = parts.semantics if parts is not None else Semantics("classic")
     if composite is None:  # trials recorded without their parts (an older run): the robustness alone
         composite, semantics = Y[:, None], Semantics("classic")
-    return propose_composite(X, composite, Y, bounds, semantics, optimizer.initial, optimizer.seed + len(history))
+    points = propose_composite(X, composite, Y, bounds, semantics, optimizer.initial, optimizer.seed + len(history), count)
+    return points[None] if count == 1 else points
 
 
 def part_observations(history: list[Trial], names: tuple[str, ...]) -> np.ndarray | None:
@@ -127,6 +158,9 @@ def observations(history: list[Trial]) -> tuple[np.ndarray, np.ndarray]:
     return X, Y
 
 
+Evaluations = Callable[[list[tuple[np.ndarray, int]]], list["Outcome | str"]]
+
+
 def run_trials(
     objective: Callable[[np.ndarray], Outcome],
     bounds: np.ndarray,
@@ -134,34 +168,46 @@ def run_trials(
     history: list[Trial],
     on_trial: Callable[[Trial, object], None],
     parts: SpecParts | None = None,
+    evaluate: Evaluations | None = None,
 ) -> list[Trial]:
     """Run trials until `optimizer.trials` are done, calling `on_trial(trial, payload)` after
-    each (to record it) and returning the whole history. `parts` (the spec's top-level
-    conjuncts) is what method `stl` models.
+    each (to record it, in trial order) and returning the whole history. `parts` (the spec's
+    top-level conjuncts) is what method `stl` models.
 
-    A trial whose objective raises or returns a non-finite value is recorded as failed with
-    its error; the loop goes on.
+    Each batch (see `next_points`) is executed by `evaluate`, given `(x, trial number)` pairs
+    and returning an `Outcome` or an error message for each (parallel workers); by default
+    `objective(x)` one after the other. A trial whose evaluation fails or gives a non-finite
+    value is recorded as failed with its error; the loop goes on.
     """
     history = list(history)
+    evaluate = evaluate or (lambda points: [_evaluated(objective, x) for x, _ in points])
     while len(history) < optimizer.trials:
         start = time.perf_counter()
-        x, phase = next_point(history, bounds, optimizer, parts)
+        batch = next_points(history, bounds, optimizer, parts)
         chosen = time.perf_counter()
-        trial = Trial(len(history) + 1, phase, x, None, optimizer_seconds=chosen - start)
-        payload = None
-        try:
-            outcome = objective(x)
-            payload = outcome.payload
-            if not np.isfinite(outcome.robustness):
-                raise ValueError(f"robustness is {outcome.robustness}")
-            trial.robustness = float(outcome.robustness)
-            trial.components = outcome.components
-        except Exception as error:  # any failure of one rollout is recorded, not fatal
-            trial.status, trial.error = "failed", _describe(error)
-        trial.rollout_seconds = time.perf_counter() - chosen
-        history.append(trial)
-        on_trial(trial, payload)
+        numbers = range(len(history) + 1, len(history) + 1 + len(batch))
+        outcomes = evaluate([(x, number) for (x, _), number in zip(batch, numbers)])
+        executed = time.perf_counter()
+        for (x, phase), number, outcome in zip(batch, numbers, outcomes):
+            trial = Trial(number, phase, x, None, optimizer_seconds=(chosen - start) / len(batch), rollout_seconds=(executed - chosen) / len(batch))
+            payload = None
+            if isinstance(outcome, str):
+                trial.status, trial.error = "failed", outcome
+            elif not np.isfinite(outcome.robustness):
+                trial.status, trial.error, payload = "failed", f"robustness is {outcome.robustness}", outcome.payload
+            else:
+                trial.robustness, trial.components, payload = float(outcome.robustness), outcome.components, outcome.payload
+            history.append(trial)
+            on_trial(trial, payload)
     return history
+
+
+def _evaluated(objective: Callable[[np.ndarray], Outcome], x: np.ndarray) -> "Outcome | str":
+    """`objective(x)`, or the message of its error: any failure of one rollout is recorded, not fatal."""
+    try:
+        return objective(x)
+    except Exception as error:
+        return describe_error(error)
 
 
 def best_trial(history: list[Trial]) -> Trial | None:
@@ -170,7 +216,8 @@ def best_trial(history: list[Trial]) -> Trial | None:
     return max(succeeded, key=lambda trial: (trial.robustness, -trial.trial)) if succeeded else None
 
 
-def _describe(error: Exception) -> str:
+def describe_error(error: Exception) -> str:
+    """One line for a failed trial: our errors' own message; others also say where they came from."""
     message = str(error) or type(error).__name__
     if not hasattr(error, "exit_code"):  # not one of ours: say where it came from
         frame = traceback.extract_tb(error.__traceback__)[-1] if error.__traceback__ else None

@@ -20,6 +20,7 @@ from stl_lfd.optim.task import Task
 # Command-line overrides, by their `Task.with_overrides` name, as the CLI spells them.
 OPTIONS = {
     "spec": "--spec", "initial": "--init", "seed": "--seed", "backend": "--backend", "command": "--command", "method": "--method", "trials": "--iterations",
+    "workers": "--workers",
 }  # fmt: skip
 # Settings that may differ on resume: the budget, and the name (a label, not part of the problem).
 MAY_CHANGE = ("name",)

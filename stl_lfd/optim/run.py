@@ -237,7 +237,17 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
     def objective(x: np.ndarray) -> Outcome:
         return prepared.objective(x, trial=len(recorder.history) + 1)
 
-    run_trials(objective, prepared.space.bounds, prepared.task.optimizer, prepared.history, record, prepared.objective.parts)
+    workers = prepared.task.optimizer.workers
+    pool = None
+    if workers > 1:
+        from stl_lfd.optim.workers import WorkerPool
+
+        pool = WorkerPool(prepared.task, prepared.models, getattr(prepared.run, "path", None), workers)
+    try:
+        run_trials(objective, prepared.space.bounds, prepared.task.optimizer, prepared.history, record, prepared.objective.parts, pool)
+    finally:
+        if pool is not None:
+            pool.close()
     recorder.wall_seconds += time.perf_counter() - mark
     summary = recorder.summary()
     prepared.run.write_summary(summary)

@@ -14,7 +14,7 @@ from typing import Any, Iterator
 
 from stl_lfd.choices import BACKENDS, METHODS, SEMANTICS
 from stl_lfd.errors import ConfigError
-from stl_lfd.limits import MAX_SEED, MAX_STATES, MAX_TRIALS, samples_problem
+from stl_lfd.limits import MAX_SEED, MAX_STATES, MAX_TRIALS, MAX_WORKERS, samples_problem
 from stl_lfd.sim.command import DEFAULT_TIMEOUT, Command
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
@@ -82,13 +82,15 @@ def _check_states(components: tuple[int, ...], key: str) -> None:
 @dataclass(frozen=True)
 class Optimizer:
     """Algorithm 1's budget: `initial` (M) Sobol trials, then `method` until `trials` (N).
-    `stl` (composite BO on the spec's parts) is the default; `pi` is the paper's algorithm."""
+    `stl` (composite BO on the spec's parts) is the default; `pi` is the paper's algorithm.
+    `workers` trials run at once, each batch proposed together (methods stl and random)."""
 
     method: str = "stl"
     initial: int = 8
     trials: int = 32
     seed: int = 0
     xi: float = 0.1
+    workers: int = 1
 
     def __post_init__(self) -> None:
         """Refuse settings that make no sense, from a task file, the command line or Python."""
@@ -104,6 +106,10 @@ class Optimizer:
             raise ConfigError(f"'optimizer.seed' must be from 0 to {MAX_SEED} (got {shown(self.seed)})")
         if not self.xi >= 0:
             raise ConfigError(f"'optimizer.xi' must be at least 0 (got {self.xi})")
+        if not 1 <= self.workers <= MAX_WORKERS:
+            raise ConfigError(f"'optimizer.workers' must be from 1 to {MAX_WORKERS} (got {shown(self.workers)})")
+        if self.workers > 1 and self.method in ("pi", "logei"):
+            raise ConfigError(f"method {self.method} proposes one trial at a time; parallel trials ('optimizer.workers' > 1) need method stl or random")
 
 
 @dataclass(frozen=True)
@@ -138,7 +144,7 @@ class Task:
 
     def with_overrides(self, **changes: Any) -> "Task":
         """A copy with command-line overrides (`spec`, `backend`, `command`, `seed`, `initial`, `trials`, `method`)."""
-        optimizer_keys = {"seed", "initial", "trials", "method"}
+        optimizer_keys = {"seed", "initial", "trials", "method", "workers"}
         with _located(self.source):
             optimizer = replace(self.optimizer, **{k: v for k, v in changes.items() if k in optimizer_keys and v is not None})
         return replace(self, optimizer=optimizer, **{k: v for k, v in changes.items() if k not in optimizer_keys and v is not None})
@@ -160,6 +166,8 @@ class Task:
         data["parameters"] = blocks[SINGLE_SKILL] if self.behaviour is None else blocks
         opt = self.optimizer
         data["optimizer"] = {"method": opt.method, "initial": opt.initial, "trials": opt.trials, "seed": opt.seed, "xi": opt.xi}
+        if opt.workers > 1:  # absent for one worker, so that the record of older runs still matches
+            data["optimizer"]["workers"] = opt.workers
         return data
 
 
@@ -312,7 +320,7 @@ def _command(data: Any, path: Path) -> Command:
 
 
 def _optimizer(data: Any, path: Path) -> Optimizer:
-    check_keys(data, ("method", "initial", "trials", "seed", "xi"), path, "optimizer")
+    check_keys(data, ("method", "initial", "trials", "seed", "xi", "workers"), path, "optimizer")
     defaults = Optimizer()
     settings = dict(
         method=_choice(data.get("method", defaults.method), METHODS, path, "optimizer.method"),
@@ -320,6 +328,7 @@ def _optimizer(data: Any, path: Path) -> Optimizer:
         trials=integer(data.get("trials", defaults.trials), path, "optimizer.trials", minimum=1),
         seed=integer(data.get("seed", defaults.seed), path, "optimizer.seed", minimum=0, maximum=MAX_SEED),
         xi=number(data.get("xi", defaults.xi), path, "optimizer.xi", minimum=0.0),
+        workers=integer(data.get("workers", defaults.workers), path, "optimizer.workers", minimum=1, maximum=MAX_WORKERS),
     )
     with _located(path):
         return Optimizer(**settings)
