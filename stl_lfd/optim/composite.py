@@ -70,7 +70,15 @@ def trust_region_length(Y: np.ndarray, initial: int, region: TrustRegion = Trust
 
 
 def propose_composite(
-    X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarray, semantics: Semantics, initial: int, seed: int, count: int = 1
+    X: np.ndarray,
+    parts: np.ndarray,
+    Y: np.ndarray,
+    bounds: np.ndarray,
+    semantics: Semantics,
+    initial: int,
+    seed: int,
+    count: int = 1,
+    pending: np.ndarray | None = None,
 ) -> np.ndarray:
     """The next point (or batch of `count` points) of composite BO.
 
@@ -86,16 +94,19 @@ def propose_composite(
             chosen with the earlier ones pending: as if observed at their posterior mean (the
             "Kriging believer", which leaves the mean unchanged and shrinks the variance around
             them), with the same GP hyperparameters.
+        pending: `p x d` points being executed (not observed yet), treated the same way.
 
     Returns:
         `d` next point, or `count x d` points when `count > 1`.
     """
     with single_threaded():
-        points = _maximise(X, parts, Y, bounds, semantics, initial, seed, count)
+        points = _maximise(X, parts, Y, bounds, semantics, initial, seed, count, pending)
     return points[0] if count == 1 else points
 
 
-def _maximise(X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarray, semantics: Semantics, initial: int, seed: int, count: int) -> np.ndarray:
+def _maximise(
+    X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarray, semantics: Semantics, initial: int, seed: int, count: int, pending: np.ndarray | None
+) -> np.ndarray:
     import torch
 
     torch.manual_seed(seed)
@@ -103,10 +114,11 @@ def _maximise(X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarra
     model = fit_multi_output_gp(unit, parts)
     posterior = PartsPosterior(model)
     box = _trust_box(unit[int(np.argmax(Y))], trust_region_length(Y, initial))
+    executing = [] if pending is None else list((pending - bounds[0]) / (bounds[1] - bounds[0]))
     chosen: list[np.ndarray] = []
     for index in range(count):
-        if chosen:
-            posterior = posterior.with_pending(torch.as_tensor(np.array(chosen), dtype=torch.float64))
+        if executing or chosen:
+            posterior = PartsPosterior(model).with_pending(torch.as_tensor(np.array(executing + chosen), dtype=torch.float64))
         acquisition = composed_log_ei(model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed + index, posterior)
         chosen.append(maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed + index))
     points = bounds[0] + np.array(chosen) * (bounds[1] - bounds[0])

@@ -12,11 +12,10 @@ import time
 import traceback
 import warnings
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Sequence
 
 import numpy as np
 
-from stl_lfd.errors import ConfigError
 from stl_lfd.optim.acquisition import propose, random_point, sobol_points
 from stl_lfd.optim.task import Optimizer
 from stl_lfd.stl import SpecParts
@@ -74,30 +73,35 @@ def next_point(history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, p
     return next_points(history, bounds, optimizer, parts)[0]
 
 
-def next_points(history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None = None) -> list[tuple[np.ndarray, str]]:
-    """The points (and phases) of the trials from `len(history) + 1` to the end of its batch.
+def next_points(
+    history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None = None, running: Sequence[np.ndarray] = ()
+) -> list[tuple[np.ndarray, str]]:
+    """The points (and phases) of the trials from `len(history) + len(running) + 1` to the end
+    of their batch; `running` are the points of the trials after `history` still executing.
 
     Trials run in batches of `optimizer.workers`: the M initial trials in batches of their own,
-    then batches proposed together from the history before the batch. A batch depends only on
-    that history, the seed and its first trial's number, so a run resumed in the middle of a
-    batch proposes the rest of it exactly as an uninterrupted run did. With one worker every
-    batch is one trial.
+    then batches proposed together. With one worker every batch is one trial, proposed from
+    the whole history. With more, a batch is proposed while the previous one executes: from the
+    history before the previous batch, with the previous batch's points (and the batch's own
+    earlier points) pending. Either way a batch depends only on the points and results of the
+    trials before it, the seed and its first trial's number, so a run resumed in the middle of
+    a batch proposes the rest of it exactly as an uninterrupted run did.
     """
-    index = len(history)
+    index = len(history) + len(running)
     start, end = batch_of(index, optimizer)
     if index < optimizer.initial:
         return [(point, "sobol") for point in sobol_points(bounds, optimizer.initial, optimizer.seed)[index:end]]
     if optimizer.method == "random":
         return [(random_point(bounds, optimizer.seed, trial), "random") for trial in range(index, end)]
-    before = history[:start]
+    observed = batch_of(start - 1, optimizer)[0] if optimizer.workers > 1 else start
+    before = history[:observed]
+    pending = np.array([trial.x for trial in history[observed:start]] + list(running)[: max(start - len(history), 0)])
     X, Y = observations(before)
     if len(Y) == 0 or np.ptp(Y) == 0:  # every trial so far failed, or all gave the same value: nothing to model yet
         return [(random_point(bounds, optimizer.seed, trial), "random") for trial in range(index, end)]
     if optimizer.method == "stl":
-        points = _composite_points(before, X, Y, bounds, optimizer, parts, end - start)
+        points = _composite_points(before, X, Y, bounds, optimizer, parts, end - start, pending)
         return [(point, "stl") for point in points[index - start :]]
-    if end - start > 1:
-        raise ConfigError(f"method {optimizer.method} proposes one trial at a time: use method stl or random with workers > 1")
     return [(propose(X, Y, bounds, optimizer.method, optimizer.xi, optimizer.seed + index), optimizer.method)]
 
 
@@ -112,7 +116,7 @@ def batch_of(index: int, optimizer: Optimizer) -> tuple[int, int]:
 
 
 def _composite_points(
-    history: list[Trial], X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None, count: int
+    history: list[Trial], X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None, count: int, pending: np.ndarray
 ) -> np.ndarray:
     from stl_lfd.optim.composite import propose_composite
     from stl_lfd.stl import Semantics
@@ -121,7 +125,7 @@ def _composite_points(
     semantics = parts.semantics if parts is not None else Semantics("classic")
     if composite is None:  # trials recorded without their parts (an older run): the robustness alone
         composite, semantics = Y[:, None], Semantics("classic")
-    points = propose_composite(X, composite, Y, bounds, semantics, optimizer.initial, optimizer.seed + len(history), count)
+    points = propose_composite(X, composite, Y, bounds, semantics, optimizer.initial, optimizer.seed + len(history), count, pending if len(pending) else None)
     return points[None] if count == 1 else points
 
 
@@ -158,7 +162,9 @@ def observations(history: list[Trial]) -> tuple[np.ndarray, np.ndarray]:
     return X, Y
 
 
-Evaluations = Callable[[list[tuple[np.ndarray, int]]], list["Outcome | str"]]
+# Starts executing a batch of `(x, trial number)` pairs and returns the function that waits for
+# their outcomes (an `Outcome`, or the error message of a failed evaluation, for each).
+Submit = Callable[[list[tuple[np.ndarray, int]]], Callable[[], list["Outcome | str"]]]
 
 
 def run_trials(
@@ -168,28 +174,35 @@ def run_trials(
     history: list[Trial],
     on_trial: Callable[[Trial, object], None],
     parts: SpecParts | None = None,
-    evaluate: Evaluations | None = None,
+    submit: Submit | None = None,
 ) -> list[Trial]:
     """Run trials until `optimizer.trials` are done, calling `on_trial(trial, payload)` after
     each (to record it, in trial order) and returning the whole history. `parts` (the spec's
     top-level conjuncts) is what method `stl` models.
 
-    Each batch (see `next_points`) is executed by `evaluate`, given `(x, trial number)` pairs
-    and returning an `Outcome` or an error message for each (parallel workers); by default
-    `objective(x)` one after the other. A trial whose evaluation fails or gives a non-finite
-    value is recorded as failed with its error; the loop goes on.
+    Each batch (see `next_points`) is executed through `submit` (parallel workers), and the
+    next batch is proposed while it executes; by default `objective(x)` one after the other. A
+    trial whose evaluation fails or gives a non-finite value is recorded as failed with its
+    error; the loop goes on.
     """
     history = list(history)
-    evaluate = evaluate or (lambda points: [_evaluated(objective, x) for x, _ in points])
-    while len(history) < optimizer.trials:
-        start = time.perf_counter()
-        batch = next_points(history, bounds, optimizer, parts)
-        chosen = time.perf_counter()
+    submit = submit or (lambda points: _done([_evaluated(objective, x) for x, _ in points]))
+    pipelined = optimizer.workers > 1  # the next batch is proposed while this one executes
+    start = time.perf_counter()
+    batch = next_points(history, bounds, optimizer, parts) if len(history) < optimizer.trials else []
+    proposal_seconds = time.perf_counter() - start
+    while batch:
+        submitted = time.perf_counter()
         numbers = range(len(history) + 1, len(history) + 1 + len(batch))
-        outcomes = evaluate([(x, number) for (x, _), number in zip(batch, numbers)])
-        executed = time.perf_counter()
+        wait = submit([(x, number) for (x, _), number in zip(batch, numbers)])
+        following, following_seconds = [], 0.0
+        if pipelined and numbers[-1] < optimizer.trials:
+            following = next_points(history, bounds, optimizer, parts, [x for x, _ in batch])
+            following_seconds = time.perf_counter() - submitted
+        outcomes = wait()
+        execution_seconds = time.perf_counter() - submitted
         for (x, phase), number, outcome in zip(batch, numbers, outcomes):
-            trial = Trial(number, phase, x, None, optimizer_seconds=(chosen - start) / len(batch), rollout_seconds=(executed - chosen) / len(batch))
+            trial = Trial(number, phase, x, None, optimizer_seconds=proposal_seconds / len(batch), rollout_seconds=execution_seconds / len(batch))
             payload = None
             if isinstance(outcome, str):
                 trial.status, trial.error = "failed", outcome
@@ -199,7 +212,16 @@ def run_trials(
                 trial.robustness, trial.components, payload = float(outcome.robustness), outcome.components, outcome.payload
             history.append(trial)
             on_trial(trial, payload)
+        if not pipelined and len(history) < optimizer.trials:
+            start = time.perf_counter()
+            following = next_points(history, bounds, optimizer, parts)
+            following_seconds = time.perf_counter() - start
+        batch, proposal_seconds = following, following_seconds
     return history
+
+
+def _done(outcomes: list) -> Callable[[], list]:
+    return lambda: outcomes
 
 
 def _evaluated(objective: Callable[[np.ndarray], Outcome], x: np.ndarray) -> "Outcome | str":

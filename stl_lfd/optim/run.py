@@ -245,9 +245,12 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
         pool = WorkerPool(prepared.task, prepared.models, getattr(prepared.run, "path", None), workers)
     try:
         run_trials(objective, prepared.space.bounds, prepared.task.optimizer, prepared.history, record, prepared.objective.parts, pool)
-    finally:
+    except BaseException:
         if pool is not None:
-            pool.close()
+            pool.stop()  # now: the trials in flight are lost, as with one worker
+        raise
+    if pool is not None:
+        pool.close()
     recorder.wall_seconds += time.perf_counter() - mark
     summary = recorder.summary()
     prepared.run.write_summary(summary)

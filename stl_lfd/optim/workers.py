@@ -13,6 +13,7 @@ import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -21,6 +22,7 @@ from stl_lfd.optim.loop import Outcome, describe_error
 from stl_lfd.optim.task import Task
 
 _objective = None  # the worker process's own objective, built by `_start`
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")  # one thread per worker
 
 
 class WorkerPool:
@@ -28,16 +30,32 @@ class WorkerPool:
 
     def __init__(self, task: Task, models: dict[str, HSMM], run_dir: Path | None, workers: int) -> None:
         context = multiprocessing.get_context("spawn")
-        self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_start, initargs=(task, models, run_dir))
-
-    def __call__(self, points: list[tuple[np.ndarray, int]]) -> list[Outcome | str]:
-        """The outcome (or error message) of each `(x, trial number)`, in order."""
-        futures = [self.pool.submit(_evaluate, x, trial) for x, trial in points]
+        saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+        os.environ.update({name: "1" for name in THREAD_VARIABLES})  # inherited by the workers as they start
         try:
-            return [future.result() for future in futures]
-        except BaseException:  # Ctrl-C: the trials in flight are lost, as with one worker
+            self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_start, initargs=(task, models, run_dir))
+            for future in [self.pool.submit(_ready) for _ in range(workers)]:  # start every worker (and its world) now
+                future.result()
+        except BaseException:
             self.stop()
             raise
+        finally:
+            for name, value in saved.items():
+                os.environ.pop(name) if value is None else os.environ.__setitem__(name, value)
+
+    def __call__(self, points: list[tuple[np.ndarray, int]]) -> Callable[[], list[Outcome | str]]:
+        """Start evaluating each `(x, trial number)`; returns the function that waits for the
+        outcomes (or error messages), in order."""
+        futures = [self.pool.submit(_evaluate, x, trial) for x, trial in points]
+
+        def wait() -> list[Outcome | str]:
+            try:
+                return [future.result() for future in futures]
+            except BaseException:  # Ctrl-C: the trials in flight are lost, as with one worker
+                self.stop()
+                raise
+
+        return wait
 
     def stop(self) -> None:
         """End the workers now (SIGTERM: each stops its executor command, if any, first)."""
@@ -51,8 +69,6 @@ class WorkerPool:
 
 def _start(task: Task, models: dict[str, HSMM], run_dir: Path | None) -> None:
     global _objective
-    for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-        os.environ[name] = "1"
     import signal
     import warnings
 
@@ -64,6 +80,10 @@ def _start(task: Task, models: dict[str, HSMM], run_dir: Path | None) -> None:
     _, _objective = objective_for(task, models)
     if run_dir is not None:
         _objective.exchange_in(run_dir)
+
+
+def _ready() -> bool:
+    return _objective is not None
 
 
 def _terminated(number: int, frame: object) -> None:
