@@ -22,6 +22,7 @@ from stl_lfd.optim.loop import Outcome, describe_error
 from stl_lfd.optim.task import Task
 
 _objective = None  # the worker process's own objective, built by `_start`
+_busy = False  # whether the worker is evaluating a trial (a stop then unwinds it first)
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")  # one thread per worker
 
 
@@ -59,9 +60,8 @@ class WorkerPool:
 
     def stop(self) -> None:
         """End the workers now (SIGTERM: each stops its executor command, if any, first)."""
-        for process in multiprocessing.active_children():
-            process.terminate()
-        self.pool.shutdown(wait=False, cancel_futures=True)
+        stop_children()
+        self.pool.shutdown(wait=True, cancel_futures=True)
 
     def close(self) -> None:
         self.pool.shutdown(wait=True, cancel_futures=True)
@@ -87,11 +87,31 @@ def _ready() -> bool:
 
 
 def _terminated(number: int, frame: object) -> None:
-    raise KeyboardInterrupt  # unwinds through the command backend, which stops its command
+    if _busy:
+        raise KeyboardInterrupt  # unwinds through the command backend, which stops its command
+    os._exit(128 + number)
 
 
 def _evaluate(x: np.ndarray, trial: int) -> Outcome | str:
+    global _busy
+    _busy = True
     try:
         return _objective(x, trial)
+    except KeyboardInterrupt:  # stopped: the executor command (if any) is stopped by now; exit
+        os._exit(130)
     except Exception as error:
         return describe_error(error)
+    finally:
+        _busy = False
+
+
+def stop_children(grace: float = 5.0) -> None:
+    """SIGTERM to every child process of this one, SIGKILL to those still running after `grace` s."""
+    children = multiprocessing.active_children()
+    for process in children:
+        process.terminate()
+    for process in children:
+        process.join(grace)
+        if process.is_alive():
+            process.kill()
+            process.join()

@@ -6,7 +6,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -15,6 +14,7 @@ from typer.testing import CliRunner
 from stl_lfd.cli import app
 from tests.conftest import ROOT
 from tests.optim.test_run import small_task
+from tests.processes import deliverable_sigint, interrupt, wait_for
 
 runner = CliRunner()
 STLOPT = str(Path(sys.executable).parent / "stlopt")
@@ -78,13 +78,6 @@ def test_a_run_folder_honours_the_umask(tmp_path, learned_model_file):
     assert (tmp_path / "run" / "summary.json").stat().st_mode & 0o777 == 0o644
 
 
-def _wait_for(condition, timeout: float = 120.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not condition():
-        assert time.monotonic() < deadline, "timed out"
-        time.sleep(0.1)
-
-
 @pytest.mark.slow
 def test_two_concurrent_resumes_one_proceeds_one_refuses(tmp_path, learned_model_file):
     task = small_task(tmp_path, learned_model_file)
@@ -95,7 +88,7 @@ def test_two_concurrent_resumes_one_proceeds_one_refuses(tmp_path, learned_model
     # both resumes give the run's own -M.
     command = command[:-2] + ["-M", "2", "--resume"]
     first = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    _wait_for(lambda: (run / ".lock").read_text().strip() == str(first.pid))
+    wait_for(lambda: (run / ".lock").read_text().strip() == str(first.pid))
     second = subprocess.run(command, capture_output=True, text=True, timeout=600)
     out, err = first.communicate(timeout=600)
     assert first.returncode == 0, err
@@ -103,14 +96,6 @@ def test_two_concurrent_resumes_one_proceeds_one_refuses(tmp_path, learned_model
     assert second.stderr.strip() == f"error: {run}: the run is being written by another stlopt process (PID {first.pid}); wait for it to end or stop it"
     numbers = [json.loads(line)["trial"] for line in (run / "trials.jsonl").read_text().splitlines()]
     assert numbers == list(range(1, 33))
-
-
-def _deliverable_sigint() -> None:
-    """In the child: SIGINT handled and unblocked as in a terminal. A shell that ran the tests in
-    the background leaves it ignored, and a test worker's thread may have it blocked; children
-    inherit both."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 @pytest.mark.slow
@@ -122,23 +107,10 @@ def test_ctrl_c_keeps_the_trials_and_dies_by_sigint(tmp_path, learned_model_file
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        preexec_fn=_deliverable_sigint,
+        preexec_fn=deliverable_sigint,
     )
-    _wait_for(lambda: (run / "trials.jsonl").exists() and len((run / "trials.jsonl").read_text().splitlines()) >= 3)
-    # Python can lose a SIGINT that lands while a finaliser (`__del__`) runs, as a second Ctrl-C
-    # in a terminal would make up for: send it again until the process ends.
-    for _ in range(10):
-        process.send_signal(signal.SIGINT)
-        try:
-            out, err = process.communicate(timeout=5)
-            break
-        except subprocess.TimeoutExpired:
-            continue
-    else:
-        status = Path(f"/proc/{process.pid}/status").read_text()
-        masks = [line for line in status.splitlines() if line.startswith(("SigBlk", "SigIgn", "SigCgt"))]
-        process.kill()
-        pytest.fail(f"the run went on through 10 SIGINTs ({'; '.join(masks)})")
+    wait_for(lambda: (run / "trials.jsonl").exists() and len((run / "trials.jsonl").read_text().splitlines()) >= 3)
+    out, err = interrupt(process)
     assert process.returncode == -signal.SIGINT
     assert f"Continue with: stlopt optimize {task} --out {run} --resume" in err
     kept = len((run / "trials.jsonl").read_text().splitlines())

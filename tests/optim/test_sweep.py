@@ -5,7 +5,6 @@ import json
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -173,23 +172,15 @@ def test_ray_gives_the_table_of_local_workers(tmp_path, learned_model_file):
 
 @pytest.mark.slow
 def test_ctrl_c_stops_a_sweep_and_the_rerun_does_the_rest(tmp_path, learned_model_file):
-    from tests.optim.test_resume import _deliverable_sigint
+    from tests.processes import deliverable_sigint, interrupt, wait_for
 
     path = sweep_file(tmp_path, learned_model_file, "trials: 12\n")
     stlopt = str(Path(sys.executable).parent / "stlopt")
     command = [stlopt, "sweep", str(path), "--out", str(tmp_path / "out"), "--jobs", "1"]
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_deliverable_sigint)
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=deliverable_sigint)
     table = tmp_path / "out" / "sweep.csv"
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and not (table.exists() and len(table.read_text().splitlines()) >= 2):
-        time.sleep(0.2)
-    for _ in range(10):
-        process.send_signal(signal.SIGINT)
-        try:
-            _, err = process.communicate(timeout=10)
-            break
-        except subprocess.TimeoutExpired:
-            continue
+    wait_for(lambda: table.exists() and len(table.read_text().splitlines()) >= 2, timeout=300)
+    _, err = interrupt(process)
     assert process.returncode == -signal.SIGINT, err
     assert "Continue with: stlopt sweep" in err and "Traceback" not in err
     done = [row["cell"] for row in read_table(tmp_path / "out")]

@@ -90,3 +90,26 @@ def test_a_run_with_two_workers_records_its_trials_in_order_and_resumes(tmp_path
     assert [(t["x"], t["robustness"]) for t in parallel[:3]] == [(t["x"], t["robustness"]) for t in sequential[:3]]
     assert all(trial["status"] == "ok" and (tmp_path / "parallel" / "signals" / f"trial-{trial['trial']:04d}.csv").exists() for trial in parallel)
     assert json.loads((tmp_path / "parallel" / "summary.json").read_text())["trials"] == 6
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_the_workers_and_the_run_resumes(tmp_path, learned_model_file):
+    import signal
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from tests.processes import deliverable_sigint, interrupt, wait_for
+
+    task = small_task(tmp_path, learned_model_file)
+    stlopt = str(Path(sys.executable).parent / "stlopt")
+    command = [stlopt, "optimize", str(task), "--out", str(tmp_path / "run"), "--workers", "2"]
+    process = subprocess.Popen(command + ["-N", "500"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=deliverable_sigint)
+    trials = tmp_path / "run" / "trials.jsonl"
+    wait_for(lambda: trials.exists() and len(trials.read_text().splitlines()) >= 6, timeout=300)
+    _, err = interrupt(process)  # returns only once nothing the run started holds its output
+    assert process.returncode == -signal.SIGINT and "Traceback" not in err, err
+    kept = len(trials.read_text().splitlines())
+    resumed = subprocess.run(command + ["-N", str(kept + 3), "--resume"], capture_output=True, text=True)
+    assert resumed.returncode == 0, resumed.stderr
+    assert [json.loads(line)["trial"] for line in trials.read_text().splitlines()] == list(range(1, kept + 4))

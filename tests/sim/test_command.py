@@ -202,28 +202,19 @@ def test_a_missing_program_is_a_clear_error():
 def test_ctrl_c_stops_the_executor_with_its_children_and_keeps_the_trials(tmp_path, learned_model_file):
     import signal
     import subprocess
-    import time
 
-    from tests.optim.test_resume import _deliverable_sigint
+    from tests.processes import deliverable_sigint, interrupt, wait_for
 
     task = executor_task(tmp_path, learned_model_file, trials=4)
     environment = dict(os.environ, EXECUTOR_MODE="hang", EXECUTOR_BAD_TRIAL="3", EXECUTOR_CHILD_PID=str(tmp_path / "child.pid"))
     stlopt = str(Path(sys.executable).parent / "stlopt")
     process = subprocess.Popen(
         [stlopt, "optimize", str(task.source), "--out", str(tmp_path / "run")],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=environment, preexec_fn=_deliverable_sigint,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=environment, preexec_fn=deliverable_sigint,
     )  # fmt: skip
-    deadline = time.monotonic() + 120
-    while not (tmp_path / "child.pid").exists() and time.monotonic() < deadline:
-        time.sleep(0.1)
+    wait_for(lambda: (tmp_path / "child.pid").exists())
     child = int((tmp_path / "child.pid").read_text())
-    for _ in range(10):  # see test_resume: a SIGINT landing in a finaliser can be lost
-        process.send_signal(signal.SIGINT)
-        try:
-            _, err = process.communicate(timeout=10)
-            break
-        except subprocess.TimeoutExpired:
-            continue
+    _, err = interrupt(process)
     assert process.returncode == -signal.SIGINT, err
     assert "the finished trials are kept" in err and "Traceback" not in err
     assert not _alive(child)
