@@ -70,6 +70,7 @@ def test_an_ask_tell_loop_gives_the_trials_of_optimize(tmp_path, learned_model_f
     assert ask(tmp_path / "asked") is None
 
 
+@pytest.mark.slow
 def test_unsafe_trials_are_refused_as_optimize_refuses_them(tmp_path, learned_model_file):
     scene = tmp_path / "tight.yaml"
     scene.write_text(TIGHT_SCENE)

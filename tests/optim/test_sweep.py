@@ -142,6 +142,7 @@ def test_a_sweep_folder_holding_another_run_is_refused(tmp_path, learned_model_f
         run_sweep(load_sweep(tmp_path / "sweep.yaml"), tmp_path / "out", lambda cells: iter(()))
 
 
+@pytest.mark.slow
 def test_the_command_prints_the_table_and_writes_the_figure_with_local_workers(tmp_path, learned_model_file):
     path = sweep_file(tmp_path, learned_model_file)
     result = runner.invoke(app, ["sweep", str(path), "--out", str(tmp_path / "out"), "--jobs", "2"])

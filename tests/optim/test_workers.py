@@ -78,6 +78,7 @@ def test_methods_that_propose_one_point_refuse_parallel_trials():
         Optimizer("stl", workers=0)
 
 
+@pytest.mark.slow
 def test_a_run_with_two_workers_records_its_trials_in_order_and_resumes(tmp_path, learned_model_file):
     task = load_task(small_task(tmp_path, learned_model_file, extra="")).with_overrides(workers=2, trials=6, initial=3)
     single = load_task(small_task(tmp_path, learned_model_file)).with_overrides(trials=6, initial=3)
