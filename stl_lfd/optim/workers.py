@@ -24,6 +24,7 @@ from stl_lfd.optim.task import Task
 _objective = None  # the worker process's own objective, built by `_start`
 _busy = False  # whether the worker is evaluating a trial (a stop then unwinds it first)
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")  # one thread per worker
+WORKER_NICENESS = 10
 
 
 class WorkerPool:
@@ -76,6 +77,9 @@ def _start(task: Task, models: dict[str, HSMM], run_dir: Path | None) -> None:
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the main process's to handle
     signal.signal(signal.SIGTERM, _terminated)
+    # The next batch's proposal (in the main process) runs beside the batch's rollouts and is the
+    # longer of the two: the rollouts yield the CPU to it, so that it never waits behind them.
+    os.nice(WORKER_NICENESS)
     warnings.simplefilter("ignore")  # a worker has no terminal: tracking warnings would be lost
     _, _objective = objective_for(task, models)
     if run_dir is not None:
