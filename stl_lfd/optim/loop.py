@@ -188,19 +188,27 @@ def run_trials(
     history = list(history)
     submit = submit or (lambda points: _done([_evaluated(objective, x) for x, _ in points]))
     pipelined = optimizer.workers > 1  # the next batch is proposed while this one executes
+
+    def started(batch: list[tuple[np.ndarray, str]], first: int) -> tuple[Callable[[], list], float]:
+        """Submit `batch` (trials from number `first`): the function that waits for it, and when."""
+        submitted = time.perf_counter()
+        return submit([(x, first + offset) for offset, (x, _) in enumerate(batch)]), submitted
+
     start = time.perf_counter()
     batch = next_points(history, bounds, optimizer, parts) if len(history) < optimizer.trials else []
     proposal_seconds = time.perf_counter() - start
+    wait, submitted = started(batch, len(history) + 1) if batch else (None, 0.0)
     while batch:
-        submitted = time.perf_counter()
         numbers = range(len(history) + 1, len(history) + 1 + len(batch))
-        wait = submit([(x, number) for (x, _), number in zip(batch, numbers)])
-        following, following_seconds = [], 0.0
+        following, following_seconds, following_wait = [], 0.0, None
         if pipelined and numbers[-1] < optimizer.trials:
+            start = time.perf_counter()
             following = next_points(history, bounds, optimizer, parts, [x for x, _ in batch])
-            following_seconds = time.perf_counter() - submitted
+            following_seconds = time.perf_counter() - start
         outcomes = wait()
         execution_seconds = time.perf_counter() - submitted
+        if following:  # the workers start on the next batch before this one is recorded
+            following_wait, following_submitted = started(following, numbers[-1] + 1)
         for (x, phase), number, outcome in zip(batch, numbers, outcomes):
             trial = Trial(number, phase, x, None, optimizer_seconds=proposal_seconds / len(batch), rollout_seconds=execution_seconds / len(batch))
             payload = None
@@ -216,7 +224,10 @@ def run_trials(
             start = time.perf_counter()
             following = next_points(history, bounds, optimizer, parts)
             following_seconds = time.perf_counter() - start
+            following_wait, following_submitted = started(following, len(history) + 1)
         batch, proposal_seconds = following, following_seconds
+        if batch:
+            wait, submitted = following_wait, following_submitted
     return history
 
 
