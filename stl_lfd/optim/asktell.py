@@ -23,7 +23,7 @@ import numpy as np
 from stl_lfd.errors import ExecutionError, RunError, SignalError
 from stl_lfd.optim.loop import Outcome, Trial, next_point
 from stl_lfd.optim.resume import check_resume
-from stl_lfd.optim.run import PreparedRun, Recorder, SkillObjective, objective_for, task_models
+from stl_lfd.optim.run import Recorder, SkillObjective, objective_for, prepared_from, task_models
 from stl_lfd.optim.rundir import SIGNALS_DIR, Pending, RunDirectory, StagedRun, check_new_run_path
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Task
@@ -65,7 +65,7 @@ def ask_new(task: Task, out: Path, inputs: dict[str, Any], learn_progress: Calla
     reference = objective.reference(models)
     gate(reference, objective.scene)  # nothing to record a refusal in yet: an error
     with StagedRun(out) as staged:
-        write_reference_csv(reference, _reference_path(staged.path, 0), objective.scene.gripper_opening)
+        _write_reference(reference, staged.path, 0, objective.scene.gripper_opening)
         run = staged.commit(task, models, None, None, inputs, Pending(0, "initial", None, 0.0, time.time()))
     run.close()
     return Asked(0, _reference_path(Path(out), 0), "initial")
@@ -92,7 +92,7 @@ def ask(
         pending = _live_pending(run)
         if pending is not None:
             return Asked(pending.trial, _reference_path(run.path, pending.trial), pending.phase, again=True)
-        prepared = _prepared(run, task)
+        prepared = prepared_from(run, task, execute=False)
         recorder, objective = Recorder(prepared), prepared.objective
         while len(recorder.history) < task.optimizer.trials:
             start = time.perf_counter()
@@ -107,7 +107,7 @@ def ask(
                 recorder.record(trial, None, seconds)
                 on_refused(trial)
                 continue
-            write_reference_csv(reference, _reference_path(run.path, number), objective.scene.gripper_opening)
+            _write_reference(reference, run.path, number, objective.scene.gripper_opening)
             run.write_pending(Pending(number, phase, x, time.perf_counter() - start, time.time()))
             return Asked(number, _reference_path(run.path, number), phase)
         return None
@@ -129,18 +129,17 @@ def tell(out: Path, signals_path: Path | None, failure: str | None = None) -> To
         if pending is None:
             raise RunError(f"{out}: no trial is pending; hand out the next one with: stlopt ask {out}")
         task = run.task()
-        models = run.models()
-        space, objective = objective_for(task, models, execute=False)
         reference = read_reference_csv(_reference_path(run.path, pending.trial))
-        if failure is not None:
-            if pending.trial == 0:
+        if pending.trial == 0:
+            if failure is not None:
                 raise RunError(f"{out}: the unoptimised skill (trial 0) cannot be told as failed: the run needs its signals to start")
+            space, objective = objective_for(task, run.models(), execute=False)
+            return _tell_initial(run, task, space, _scored(objective, reference, Path(signals_path), run, 0), pending)
+        prepared = prepared_from(run, task, execute=False)
+        if failure is not None:
             outcome, error = None, f"execution failed: {failure}"
         else:
-            outcome, error = _scored(objective, reference, Path(signals_path), run, pending.trial), None
-        if pending.trial == 0:
-            return _tell_initial(run, task, space, outcome, pending)
-        prepared = PreparedRun(task, run, models, space, objective, run.trials(), run.summary())
+            outcome, error = _scored(prepared.objective, reference, Path(signals_path), run, pending.trial), None
         seconds = time.time() - pending.asked
         robustness = None if outcome is None or not np.isfinite(outcome.robustness) else float(outcome.robustness)
         if outcome is not None and robustness is None:
@@ -217,19 +216,14 @@ def _live_pending(run: RunDirectory) -> Pending | None:
     return pending
 
 
-def _prepared(run: RunDirectory, task: Task) -> PreparedRun:
-    models = run.models()
-    space, objective = objective_for(task, models, execute=False)
-    history = run.trials()
-    if any(len(trial.x) != space.dimension for trial in history):
-        raise RunError(f"{run.path / 'trials.jsonl'}: damaged (the recorded points do not have the task's {space.dimension} parameters)")
-    return PreparedRun(task, run, models, space, objective, history, run.summary())
-
-
 def _reference_path(run_dir: Path, trial: int) -> Path:
-    path = exchange_folder(run_dir, trial) / REFERENCE_FILE
+    return exchange_folder(run_dir, trial) / REFERENCE_FILE
+
+
+def _write_reference(reference: Reference, run_dir: Path, trial: int, open_width: float) -> None:
+    path = _reference_path(run_dir, trial)
     path.parent.mkdir(parents=True, exist_ok=True)
-    return path
+    write_reference_csv(reference, path, open_width)
 
 
 __all__ = ["Asked", "Told", "UnsafeReference", "ask", "ask_new", "tell"]

@@ -182,14 +182,19 @@ def _reopen(run: RunDirectory, out: Path, trials: int | None, file_task: Task | 
     pending = run.pending()
     if pending is not None:
         raise RunError(f"{out}: trial {pending.trial} was handed out by stlopt ask and is not told yet; tell its signals first (stlopt tell {out} SIGNALS.csv)")
+    return prepared_from(run, task)
+
+
+def prepared_from(run: RunDirectory, task: Task, execute: bool = True) -> PreparedRun:
+    """An existing run ready for more trials: its models, space, objective (executing in the
+    run's folder, or only scoring unless `execute`), checked history and summary."""
     models = run.models()
-    space, objective = objective_for(task, models)
+    space, objective = objective_for(task, models, execute=execute)
     objective.exchange_in(run.path)
     history = run.trials()
     if any(len(trial.x) != space.dimension for trial in history):
         raise RunError(f"{run.path / 'trials.jsonl'}: damaged (the recorded points do not have the task's {space.dimension} parameters)")
-    summary = run.summary()
-    return PreparedRun(task, run, models, space, objective, history, summary)
+    return PreparedRun(task, run, models, space, objective, history, run.summary())
 
 
 class Recorder:

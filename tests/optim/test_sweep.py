@@ -184,11 +184,20 @@ def test_ctrl_c_stops_a_sweep_and_the_rerun_does_the_rest(tmp_path, learned_mode
     _, err = interrupt(process)
     assert process.returncode == -signal.SIGINT, err
     assert "Continue with: stlopt sweep" in err and "Traceback" not in err
+    names = [cell.name for cell in load_sweep(path).cells]
     done = [row["cell"] for row in read_table(tmp_path / "out")]
-    assert 1 <= len(done) < 4
+    # one worker runs the cells in order: the finished ones are a prefix, each a complete run
+    # directory, and the cell in flight left nothing behind
+    assert done == names[: len(done)] and len(done) < len(names)
+    assert sorted(folder.name for folder in (tmp_path / "out" / "runs").iterdir()) == sorted(done)
+    assert not any((tmp_path / "out" / ".scratch").glob("*"))
+    kept = {name: (tmp_path / "out" / "runs" / name / "trials.jsonl").stat().st_mtime_ns for name in done}
     finished = subprocess.run(command, capture_output=True, text=True)
     assert finished.returncode == 0, finished.stderr
     assert f"{len(done)} of 4 cells already done" in finished.stderr
+    ran = [line.split(":")[0] for line in finished.stderr.splitlines() if line.startswith(tuple(names))]
+    assert ran == names[len(done) :]  # only the missing cells ran again
+    assert all((tmp_path / "out" / "runs" / name / "trials.jsonl").stat().st_mtime_ns == mtime for name, mtime in kept.items())
     assert len(read_table(tmp_path / "out")) == 4
     with open(table) as stream:
         assert [row["cell"] for row in csv.DictReader(stream)] == [cell.name for cell in load_sweep(path).cells]
