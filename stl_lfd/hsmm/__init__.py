@@ -1,9 +1,10 @@
-"""Skill models: HSMM learning from demonstrations, state sequences, LQT retrieval."""
+"""Skill models: HSMM and TP-HSMM learning from demonstrations, state sequences, LQT retrieval."""
 
-from stl_lfd.hsmm.demos import load_demos
+from stl_lfd.hsmm.demos import load_demo_frames, load_demos
 from stl_lfd.hsmm.io import load_model, save_model
 from stl_lfd.hsmm.learn import learn, learn_from_folder, summary_rows
 from stl_lfd.hsmm.model import HSMM
 from stl_lfd.hsmm.retrieval import Trajectory, retrieve
+from stl_lfd.hsmm.tp import TPHSMM
 
-__all__ = ["HSMM", "Trajectory", "learn", "learn_from_folder", "load_demos", "load_model", "retrieve", "save_model", "summary_rows"]
+__all__ = ["HSMM", "TPHSMM", "Trajectory", "learn", "learn_from_folder", "load_demo_frames", "load_demos", "load_model", "retrieve", "save_model", "summary_rows"]

@@ -1,4 +1,5 @@
-"""Demonstrations: a folder of signal CSVs, checked and resampled to one sample period."""
+"""Demonstrations: a folder of signal CSVs, checked and resampled to one sample period, and
+the optional frame sidecars that give the poses of the objects each demonstration refers to."""
 
 from __future__ import annotations
 
@@ -6,10 +7,13 @@ from pathlib import Path
 
 import numpy as np
 
-from stl_lfd.errors import SignalError
+from stl_lfd.errors import ConfigError, SignalError
+from stl_lfd.poses import BASE_FRAME, Pose, parse_pose
 from stl_lfd.signals import SignalTable, read_signal_csv
+from stl_lfd.yamlfile import check_keys, read_yaml
 
 POSITION_COLUMNS = ("x", "y", "z")
+SIDECAR_SUFFIX = ".frames.yaml"
 
 
 def load_demos(folder: str | Path) -> list[SignalTable]:
@@ -37,3 +41,40 @@ def resample(demo: SignalTable, period: float) -> np.ndarray:
     """`T x D` samples of `demo` every `period` seconds from its first sample (linear interpolation)."""
     times = demo.times[0] + np.arange(int(np.floor(demo.duration / period + 1e-9)) + 1) * period
     return np.column_stack([np.interp(times, demo.times, values) for values in demo.columns.values()])
+
+
+def sidecar_path(demo: SignalTable | str | Path) -> Path:
+    """`demo_01.frames.yaml` beside `demo_01.csv`."""
+    path = Path(demo.source if isinstance(demo, SignalTable) else demo)
+    return path.with_name(path.stem + SIDECAR_SUFFIX)
+
+
+def load_demo_frames(demos: list[SignalTable]) -> list[dict[str, Pose]] | None:
+    """The frame poses of every demonstration, from their sidecars; None when no demonstration
+    has one. Every demonstration needs a sidecar once one has, with the same frame names."""
+    paths = [sidecar_path(demo) for demo in demos]
+    present = [path.is_file() for path in paths]
+    if not any(present):
+        return None
+    if not all(present):
+        missing, example = paths[present.index(False)], paths[present.index(True)]
+        raise ConfigError(f"{missing}: missing; {example.name} gives frames, so every demonstration needs its sidecar")
+    frames = [read_sidecar(path) for path in paths]
+    for path, poses in zip(paths[1:], frames[1:]):
+        if set(poses) != set(frames[0]):
+            raise ConfigError(f"{path}: frames {', '.join(sorted(poses))} differ from {paths[0].name} ({', '.join(sorted(frames[0]))})")
+    return frames
+
+
+def read_sidecar(path: Path) -> dict[str, Pose]:
+    """`frames: {NAME: {position: [x, y, z], yaw: RAD}}` (base frame, metres, radians)."""
+    data = check_keys(read_yaml(path), ("frames",), path, required=("frames",))
+    frames = data["frames"]
+    if not isinstance(frames, dict) or not frames:
+        raise ConfigError(f"{path}: 'frames' must map each object's name to its pose")
+    poses = {}
+    for name, pose in frames.items():
+        if not isinstance(name, str) or not name.isidentifier() or name == BASE_FRAME:
+            raise ConfigError(f"{path}: frame name {name!r} must be a name (letters, digits, _) other than '{BASE_FRAME}'")
+        poses[name] = parse_pose(pose, path, f"frames.{name}")
+    return poses

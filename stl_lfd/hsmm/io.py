@@ -1,4 +1,8 @@
-"""Model files: one self-describing `.npz` holding every learned attribute of an `HSMM`."""
+"""Model files: one self-describing `.npz` holding every learned attribute of an `HSMM`.
+
+Version 2 added `frame_names` for task-parameterised models (`TPHSMM`); files without it (all
+version 1 files) hold a single-frame `HSMM`.
+"""
 
 from __future__ import annotations
 
@@ -10,15 +14,17 @@ import numpy as np
 from stl_lfd.errors import ModelError
 from stl_lfd.files import atomic_output
 from stl_lfd.hsmm.model import HSMM
+from stl_lfd.hsmm.tp import TPHSMM
 
 FORMAT = "stlopt-hsmm"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 _ARRAYS = ("means_", "covars_", "duration_means_", "duration_stds_", "transmat_", "startprob_")
 
 
 def save_model(model: HSMM, path: str | Path) -> None:
     """Write `model` to `path` (.npz), atomically (see `stl_lfd.files`)."""
     model._check()
+    frames = {"frame_names": np.array(model.frame_names_)} if isinstance(model, TPHSMM) else {}
     with atomic_output(path) as temporary:
         np.savez(
             temporary,
@@ -28,6 +34,7 @@ def save_model(model: HSMM, path: str | Path) -> None:
             sample_period=model.sample_period_,
             signal_names=np.array(model.signal_names_),
             **{name.rstrip("_"): np.asarray(getattr(model, name)) for name in _ARRAYS},
+            **frames,
         )
 
 
@@ -56,7 +63,9 @@ def load_model(path: str | Path) -> HSMM:
     missing = [name for name in _ARRAYS if name.rstrip("_") not in fields]
     if missing:
         raise ModelError(f"{path}: the model file lacks '{missing[0].rstrip('_')}'")
-    model = HSMM(n_states=int(fields["n_states"]))
+    model = TPHSMM(n_states=int(fields["n_states"])) if "frame_names" in fields else HSMM(n_states=int(fields["n_states"]))
+    if isinstance(model, TPHSMM):
+        model.frame_names_ = [str(name) for name in fields["frame_names"]]
     for name in _ARRAYS:
         setattr(model, name, np.array(fields[name.rstrip("_")], dtype=float))
     model.sample_period_ = float(fields["sample_period"])

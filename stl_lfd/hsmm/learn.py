@@ -8,9 +8,11 @@ from pathlib import Path
 import numpy as np
 
 from stl_lfd.errors import ModelError
-from stl_lfd.hsmm.demos import load_demos, median_period, resample
+from stl_lfd.hsmm.demos import SIDECAR_SUFFIX, load_demo_frames, load_demos, median_period, resample
 from stl_lfd.hsmm.model import HSMM
+from stl_lfd.hsmm.tp import TPHSMM
 from stl_lfd.limits import MAX_STATES, samples_problem
+from stl_lfd.poses import BASE_FRAME, Pose
 from stl_lfd.signals import SignalTable
 
 # Demonstrations are resampled no finer than this (s): hand-guided motions have no content
@@ -18,20 +20,51 @@ from stl_lfd.signals import SignalTable
 COARSEST_DEFAULT_PERIOD = 0.02
 
 
-def learn_from_folder(folder: str | Path, n_states: int = 6, sample_period: float | None = None) -> tuple[HSMM, list[np.ndarray]]:
-    """Load every demonstration CSV of `folder`, then `learn`."""
+def learn_from_folder(
+    folder: str | Path, n_states: int = 6, sample_period: float | None = None, frames: list[str] | None = None
+) -> tuple[HSMM, list[np.ndarray]]:
+    """Load every demonstration CSV of `folder` and its frame sidecar if any, then `learn`.
+
+    With sidecars the model is a `TPHSMM` in the frames `frames` (default: `base` and every
+    frame of the sidecars); `frames=["base"]` without sidecars gives a one-frame `TPHSMM`.
+    """
     _check_settings(n_states, sample_period)
-    return learn(load_demos(folder), n_states, sample_period, source=str(folder))
+    demos = load_demos(folder)
+    poses = load_demo_frames(demos)
+    return learn(demos, n_states, sample_period, source=str(folder), poses=poses, frames=model_frames(poses, frames, str(folder)))
 
 
-def learn(demos: list[SignalTable], n_states: int = 6, sample_period: float | None = None, source: str = "demonstrations") -> tuple[HSMM, list[np.ndarray]]:
+def model_frames(poses: list[dict[str, Pose]] | None, chosen: list[str] | None, source: str) -> list[str] | None:
+    """The frames to learn in: `chosen` (checked against the sidecars), or `base` and every
+    sidecar frame, or None (a plain HSMM) without sidecars."""
+    available = [BASE_FRAME] + (list(poses[0]) if poses else [])
+    if chosen is None:
+        return available if poses else None
+    unknown = [name for name in chosen if name not in available]
+    if unknown:
+        where = f"the sidecars give {', '.join(available[1:])}" if poses else f"no demonstration has a frame sidecar (*{SIDECAR_SUFFIX})"
+        raise ModelError(f"{source}: no frame {', '.join(unknown)} ({where})")
+    if not chosen or len(set(chosen)) != len(chosen):
+        raise ModelError(f"{source}: frames must be distinct names (got {', '.join(chosen) or 'none'})")
+    return list(chosen)
+
+
+def learn(
+    demos: list[SignalTable],
+    n_states: int = 6,
+    sample_period: float | None = None,
+    source: str = "demonstrations",
+    poses: list[dict[str, Pose]] | None = None,
+    frames: list[str] | None = None,
+) -> tuple[HSMM, list[np.ndarray]]:
     """Resample the demonstrations (signal tables with the same columns) to one period and fit.
 
     The default period is the demonstrations' median period, but not finer than
-    `COARSEST_DEFAULT_PERIOD` (50 Hz).
+    `COARSEST_DEFAULT_PERIOD` (50 Hz). With `frames`, the model is a `TPHSMM` learned in those
+    frames, `poses` giving each demonstration's frame poses.
 
     Returns:
-        the fitted model and the resampled demonstrations (`T_i x D` each).
+        the fitted model and the resampled demonstrations (`T_i x D` each, base frame).
     """
     _check_settings(n_states, sample_period)
     if not demos:
@@ -47,8 +80,15 @@ def learn(demos: list[SignalTable], n_states: int = 6, sample_period: float | No
         raise ModelError(
             f"{source}: K = {n_states} needs at least {2 * n_states} samples per demonstration (the shortest has {shortest} after resampling); use a smaller K"
         )
-    model = HSMM(n_states=n_states)
-    model.fit(np.concatenate(sequences), np.array([len(s) for s in sequences]), period, list(demos[0].columns))
+    lengths = np.array([len(s) for s in sequences])
+    if frames is None:
+        return HSMM(n_states=n_states).fit(np.concatenate(sequences), lengths, period, list(demos[0].columns)), sequences
+    poses = poses if poses is not None else [{} for _ in demos]
+    model = TPHSMM(n_states=n_states)
+    try:
+        model.fit(np.concatenate(sequences), lengths, period, list(demos[0].columns), poses, frames)
+    except ModelError as error:
+        raise ModelError(f"{source}: {error}") from None
     return model, sequences
 
 

@@ -211,14 +211,27 @@ class HSMM:
             raise ModelError("model parameters contain NaN or infinity")
         if np.any(np.asarray(self.duration_means_) <= 0) or np.any(np.asarray(self.duration_stds_) <= 0):
             raise ModelError(f"duration means and stds must be positive (got means {np.round(self.duration_means_, 3)})")
-        if len(self.signal_names_) != D:
-            raise ModelError(f"signal_names_ must name the {D} signals (got {list(self.signal_names_)})")
+        if len(self.feature_names) != D:
+            raise ModelError(f"the {D} columns of means_ do not match the signals {', '.join(self.feature_names)}")
         if not np.isclose(np.sum(self.startprob_), 1.0):
             raise ModelError(f"startprob_ must sum to 1 (got {np.sum(self.startprob_):.6g})")
 
     @property
     def n_features(self) -> int:
         return int(np.shape(self.means_)[1])
+
+    @property
+    def feature_names(self) -> list[str]:
+        """The name of each column of `means_`."""
+        return list(self.signal_names_)
+
+    def coordinate(self, name: str, frame: str | None = None) -> int:
+        """The column of `means_` holding signal `name` (ModelError when there is none)."""
+        if frame is not None:
+            raise ModelError(f"the model has no frames (it was learned without frame sidecars), so there is no frame {frame}")
+        if name not in self.signal_names_:
+            raise ModelError(f"the model has no signal {name} ({', '.join(self.signal_names_)})")
+        return self.signal_names_.index(name)
 
     # --- EM internals ----------------------------------------------------------------------
 
@@ -238,8 +251,12 @@ class HSMM:
         pooled = [np.concatenate([b[k] for b in bins]) for k in range(K)]
         self.means_ = np.array([samples.mean(axis=0) for samples in pooled])
         covars = [np.atleast_2d(np.cov(samples.T, bias=True)) if len(samples) > 1 else np.zeros((D, D)) for samples in pooled]
-        self.covars_ = np.array(covars) + self.reg_covar * np.eye(D)
+        self.covars_ = self._constrained(np.array(covars)) + self.reg_covar * np.eye(D)
         self.startprob_ = np.eye(K)[0]
+
+    def _constrained(self, covars: np.ndarray) -> np.ndarray:
+        """The covariances EM may use (all of them here; block-diagonal in `TPHSMM`)."""
+        return covars
 
     def _left_right_start(self, lengths: np.ndarray) -> np.ndarray:
         K = self.n_states
@@ -267,7 +284,7 @@ class HSMM:
         safe = np.maximum(weights, 1e-12)
         self.means_ = np.einsum("btk,btd->kd", gamma, padded) / safe[:, None]
         centred = padded[:, :, None, :] - self.means_[None, None]  # B x T x K x D
-        self.covars_ = np.einsum("btk,btkd,btke->kde", gamma, centred, centred) / safe[:, None, None]
+        self.covars_ = self._constrained(np.einsum("btk,btkd,btke->kde", gamma, centred, centred) / safe[:, None, None])
         self.covars_ += self.reg_covar * np.eye(D)
         transmat = xi_sum / np.maximum(xi_sum.sum(axis=1, keepdims=True), 1e-300)
         starts = gamma[:, 0].sum(axis=0)

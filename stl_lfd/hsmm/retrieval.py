@@ -9,13 +9,16 @@ execution rates such as 240 Hz.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Mapping
 
 import numpy as np
 
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm import lqt
 from stl_lfd.hsmm.model import HSMM
+from stl_lfd.hsmm.tp import TPHSMM
 from stl_lfd.limits import samples_problem
+from stl_lfd.poses import Pose
 
 # Control cost of the tracker relative to the state precisions; smaller tracks the means
 # more tightly, larger gives smoother, lazier motion.
@@ -46,18 +49,22 @@ def retrieve(
     duration: float | None = None,
     rate: float | None = None,
     control_cost: float = DEFAULT_CONTROL_COST,
+    poses: Mapping[str, Pose] | None = None,
 ) -> Trajectory:
     """Reference trajectory of `model`.
 
     Args:
-        model: a fitted (possibly modified) HSMM.
+        model: a fitted (possibly modified) HSMM or TP-HSMM.
         duration: seconds to retrieve (default: the model's expected duration).
         rate: samples per second of the result (default: the model's own rate).
         control_cost: weight r of the acceleration cost R = r I.
+        poses: for a TP-HSMM, the pose of every frame but `base` (see `TPHSMM.at`).
 
     Returns:
-        The trajectory, starting at rest at the mean of the first state.
+        The trajectory (base frame), starting at rest at the mean of the first state.
     """
+    if isinstance(model, TPHSMM):
+        model = model.at(poses or {})
     dt = model.sample_period_
     duration = model.expected_duration() if duration is None else float(duration)
     problem = samples_problem(duration, 1.0 / dt) or (samples_problem(duration, float(rate)) if rate is not None else "")

@@ -50,7 +50,7 @@ class SkillObjective:
 
     def reference(self, models: dict[str, HSMM]) -> Reference:
         """What executing `models` means: the behaviour's (or single skill's) reference."""
-        return reference_for(models, self.behaviour, self.scene.gripper_opening, self.task.duration)
+        return reference_for(models, self.behaviour, self.scene.gripper_opening, self.task.duration, self.scene.frame_poses)
 
     def evaluate(self, models: dict[str, HSMM], trial: int = 0) -> Outcome:
         """Execute `models` as trial `trial` (0: the unoptimised skill) and score the signals."""

@@ -67,7 +67,7 @@ def replay_skill(request: ReplayRequest, gui: bool, video: Path | None, progress
         video = check_output_file(video if video is not None else skill.default_video, VIDEO_SUFFIXES, "video")
     scene = scene_with_spec_regions(skill.scene, skill.spec)
     behaviour = load_behaviour(skill.behaviour) if skill.behaviour is not None else None
-    reference = reference_for(skill.models, behaviour, scene.gripper_opening, skill.duration)
+    reference = reference_for(skill.models, behaviour, scene.gripper_opening, skill.duration, scene.frame_poses)
     if gui:
         from stl_lfd.sim.panda import PyBulletBackend, pace_real_time
 

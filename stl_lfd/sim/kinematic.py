@@ -1,6 +1,8 @@
 """The kinematic backend: the reference itself is the recorded signal.
 
-Instant and exact, for tests and quick studies. Nothing can be touched, so `force` is 0.
+Instant and exact, for tests and quick studies. Nothing can be touched, so `force` is 0, and
+the scene's objects stay where they were placed: their frames' positions are constant, even
+while grasped.
 """
 
 from __future__ import annotations
@@ -28,6 +30,9 @@ class KinematicBackend:
             "gripper": reference.gripper_at(times, scene.gripper_opening),
             "force": np.zeros(times.size),
         }
+        for frame in scene.frames:
+            for value, name in zip(frame.pose.position, frame.signals):
+                columns[name] = np.full(times.size, float(value))
         return Rollout(SignalTable(times, columns, source="kinematic rollout"), np.zeros(times.size))
 
     def close(self) -> None:

@@ -26,7 +26,7 @@ import numpy as np
 from stl_lfd.errors import ExecutionError
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.reference import TIME_STEP, Reference, Rollout, recording_times
-from stl_lfd.sim.scene import Camera, Region, Scene, SceneObject
+from stl_lfd.sim.scene import Camera, Region, Scene, SceneFrame, SceneObject
 
 END_EFFECTOR_LINK = 11
 ARM_JOINTS = list(range(7))
@@ -91,6 +91,7 @@ class PandaWorld:
         self.objects = {item.name: self._add_object(item) for item in scene.objects}
         self.movable = [self.objects[item.name] for item in scene.objects if item.mass > 0]
         self.held: tuple[int, int] | None = None  # (object body, constraint)
+        self._frame_anchors = [self._anchor(frame) for frame in scene.frames]
         for region in scene.regions:
             self._add_region(region)
         for joint, angle in zip(ARM_JOINTS + FINGER_JOINTS, REST_POSE):
@@ -118,6 +119,30 @@ class PandaWorld:
         )
         client.changeDynamics(body, -1, lateralFriction=item.friction)
         return body
+
+    def _anchor(self, frame: SceneFrame) -> tuple[int, np.ndarray] | np.ndarray:
+        """How to find the frame's origin: fixed (its position), or moving with its first
+        movable object (that body and the origin in the body's frame)."""
+        masses = {item.name: item.mass for item in self.scene.objects}
+        movable = [name for name in frame.objects if masses[name] > 0]
+        if not movable:
+            return np.array(frame.pose.position)
+        body = self.objects[movable[0]]
+        position, orientation = self.client.getBasePositionAndOrientation(body)
+        inverse = self.client.invertTransform(position, orientation)
+        local, _ = self.client.multiplyTransforms(inverse[0], inverse[1], frame.pose.position, (0.0, 0.0, 0.0, 1.0))
+        return body, np.array(local)
+
+    def frame_positions(self) -> np.ndarray:
+        """`F x 3` positions of the scene's frames now (a grasped shaft's frame moves with it)."""
+        positions = np.empty((len(self._frame_anchors), 3))
+        for index, anchor in enumerate(self._frame_anchors):
+            if isinstance(anchor, np.ndarray):
+                positions[index] = anchor
+                continue
+            position, orientation = self.client.getBasePositionAndOrientation(anchor[0])
+            positions[index] = self.client.multiplyTransforms(position, orientation, anchor[1], (0.0, 0.0, 0.0, 1.0))[0]
+        return positions
 
     def _add_region(self, region: Region) -> int:
         lower, upper = np.array(region.lower), np.array(region.upper)
@@ -248,9 +273,10 @@ class PyBulletBackend:
         self._worlds: dict[Scene, PandaWorld] = {}
 
     def world(self, scene: Scene, fresh: bool = False) -> PandaWorld:
-        """The world of `scene`; `fresh` builds it anew (closing the previous one)."""
-        if fresh and scene in self._worlds:
-            self._worlds.pop(scene).close()
+        """The world of `scene`; `fresh` builds it anew (closing every world kept so far, so
+        that rollouts over many object placements keep one world open, not one per placement)."""
+        if fresh:
+            self.close()
         if scene not in self._worlds:
             self._worlds[scene] = PandaWorld(scene, self.gui)
         return self._worlds[scene]
@@ -273,9 +299,11 @@ class PyBulletBackend:
         positions = np.empty((steps + 1, 3))
         fingers = np.empty(steps + 1)
         forces = np.empty(steps + 1)
+        frames = np.empty((steps + 1, len(scene.frames), 3))
         world.reset(targets[0], openings[0])
         events = list(reference.events)
         positions[0], fingers[0], forces[0] = world.end_effector(), world.gripper_opening(), world.contact_force()
+        frames[0] = world.frame_positions()
         if observer is not None:
             observer(0.0, world)
         for step in range(1, steps + 1):
@@ -285,11 +313,13 @@ class PyBulletBackend:
             world.command(targets[step], openings[step])
             world.step()
             positions[step], fingers[step], forces[step] = world.end_effector(), world.gripper_opening(), world.contact_force()
+            frames[step] = world.frame_positions()
             if observer is not None:
                 observer(step_times[step], world)
         if not np.isfinite(positions).all():
             raise ExecutionError("rollout: the simulation diverged (non-finite end-effector positions)")
-        return _record(step_times, positions, fingers, low_pass(forces, scene.force_filter_hz, TIME_STEP), reference, rate)
+        forces = low_pass(forces, scene.force_filter_hz, TIME_STEP)
+        return _record(step_times, positions, fingers, forces, frames, scene, reference, rate)
 
     def close(self) -> None:
         for world in self._worlds.values():
@@ -333,7 +363,7 @@ def low_pass(values: np.ndarray, cutoff_hz: float, period: float) -> np.ndarray:
     return filtered
 
 
-def _record(step_times, positions, fingers, forces, reference: Reference, rate: float) -> Rollout:
+def _record(step_times, positions, fingers, forces, frames, scene: Scene, reference: Reference, rate: float) -> Rollout:
     times = recording_times(reference.duration, rate)
     times = times[times <= step_times[-1] + 1e-9]
     recorded = np.column_stack([np.interp(times, step_times, positions[:, axis]) for axis in range(3)])
@@ -344,6 +374,9 @@ def _record(step_times, positions, fingers, forces, reference: Reference, rate: 
         "gripper": np.interp(times, step_times, fingers),
         "force": np.interp(times, step_times, forces),
     }
+    for index, frame in enumerate(scene.frames):
+        for axis, name in enumerate(frame.signals):
+            columns[name] = np.interp(times, step_times, frames[:, index, axis])
     error = np.linalg.norm(recorded - reference.positions_at(times), axis=1)
     return Rollout(SignalTable(times, columns, source="pybullet rollout"), error)
 

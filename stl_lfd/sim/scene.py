@@ -13,7 +13,11 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
+import numpy as np
+
+from stl_lfd.choices import RECORDED_SIGNALS
 from stl_lfd.errors import ConfigError
+from stl_lfd.poses import BASE_FRAME, Pose, parse_pose
 from stl_lfd.sim.safety import Safety
 from stl_lfd.yamlfile import check_keys, number, read_yaml, shown, vector
 
@@ -62,6 +66,27 @@ class SceneObject:
 
 
 @dataclass(frozen=True)
+class SceneFrame:
+    """A named object pose that skills refer to (a TP-HSMM frame) and that can be placed.
+
+    Attributes:
+        name: the frame's name (`shaft`); rollouts record its origin as `NAME_x, NAME_y, NAME_z`.
+        pose: where the frame is (position in metres, yaw in radians about z).
+        objects: the scene objects that move with it, rigidly.
+        area: `(lower, upper)` x-y corners the frame's position may be placed in, or None.
+    """
+
+    name: str
+    pose: Pose
+    objects: tuple[str, ...]
+    area: tuple[tuple[float, float], tuple[float, float]] | None = None
+
+    @property
+    def signals(self) -> tuple[str, str, str]:
+        return (f"{self.name}_x", f"{self.name}_y", f"{self.name}_z")
+
+
+@dataclass(frozen=True)
 class Region:
     """An axis-aligned box drawn for viewing only (no collision): `lower` and `upper` corners."""
 
@@ -87,6 +112,7 @@ class Scene:
             `grasp` event to take it.
         camera: the viewpoint of videos and of the GUI.
         objects: rigid bodies besides the robot and the floor.
+        frames: object poses that skills refer to; `place` moves them with their objects.
         regions: boxes drawn for viewing.
         safety: the workspace box and maximum speed every reference must respect before it
             leaves stlopt (external command, `stlopt ask`); None when the scene declares none.
@@ -102,9 +128,41 @@ class Scene:
     grasp_distance: float = 0.03
     camera: Camera = field(default_factory=Camera)
     objects: tuple[SceneObject, ...] = ()
+    frames: tuple[SceneFrame, ...] = ()
     regions: tuple[Region, ...] = ()
     safety: Safety | None = None
     source: str = field(default="", repr=False, compare=False)
+
+    @property
+    def frame_poses(self) -> dict[str, Pose]:
+        """Frame name -> its pose."""
+        return {frame.name: frame.pose for frame in self.frames}
+
+    @property
+    def recorded_signals(self) -> tuple[str, ...]:
+        """What a rollout in this scene records: `RECORDED_SIGNALS` and each frame's position."""
+        return RECORDED_SIGNALS + tuple(signal for frame in self.frames for signal in frame.signals)
+
+    def place(self, placements: Mapping[str, Pose], source: str = "--place") -> "Scene":
+        """A copy with frames moved to `placements` (name -> pose), their objects with them.
+
+        ConfigError for a frame the scene lacks or a position outside the frame's area."""
+        frames = {frame.name: frame for frame in self.frames}
+        objects = {item.name: item for item in self.objects}
+        for name, pose in placements.items():
+            if name not in frames:
+                known = ", ".join(frames) or "none"
+                raise ConfigError(f"{source}: the scene {self.name} has no object frame '{name}' (its frames: {known})")
+            frame = frames[name]
+            _check_area(frame, pose, source)
+            for object_name in frame.objects:
+                item = objects[object_name]
+                local = frame.pose.from_base(np.array([item.position]))
+                position = tuple(float(v) for v in pose.to_base(local)[0])
+                yaw = item.orientation[2] + pose.yaw - frame.pose.yaw
+                objects[object_name] = replace(item, position=position, orientation=(item.orientation[0], item.orientation[1], yaw))
+            frames[name] = replace(frame, pose=pose)
+        return replace(self, objects=tuple(objects.values()), frames=tuple(frames.values()))
 
     def with_regions(self, boxes: Mapping[str, Mapping[str, tuple[float, float]]]) -> "Scene":
         """A copy that also draws `boxes` (name -> {signal: (lo, hi)}); boxes need x, y and z."""
@@ -116,6 +174,18 @@ class Scene:
             upper = tuple(float(box[axis][1]) for axis in "xyz")
             regions.append(Region(name, lower, upper, REGION_COLORS[index % len(REGION_COLORS)]))
         return replace(self, regions=tuple(regions))
+
+
+def _check_area(frame: SceneFrame, pose: Pose, source: str) -> None:
+    if frame.area is None:
+        return
+    (x_low, y_low), (x_high, y_high) = frame.area
+    x, y = pose.position[0], pose.position[1]
+    if not (x_low <= x <= x_high and y_low <= y <= y_high):
+        raise ConfigError(
+            f"{source}: {frame.name} at ({x:g}, {y:g}) is outside the area it may be placed in "
+            f"(x {x_low:g} to {x_high:g}, y {y_low:g} to {y_high:g})"
+        )
 
 
 def builtin_scenes() -> list[str]:
@@ -142,7 +212,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
 
 def parse_scene(data: dict[str, Any], path: Path) -> Scene:
     """Validate the mapping read from a scene file."""
-    keys = ("description", "gripper_opening", "control", "force_filter_hz", "tracking_tolerance", "grasp_distance", "camera", "objects", "safety")
+    keys = ("description", "gripper_opening", "control", "force_filter_hz", "tracking_tolerance", "grasp_distance", "camera", "objects", "frames", "safety")
     check_keys(data, keys, path, required=("description",))
     scene = Scene(name=path.stem, description=str(data["description"]))
     if "gripper_opening" in data:
@@ -161,7 +231,33 @@ def parse_scene(data: dict[str, Any], path: Path) -> Scene:
     objects = data.get("objects") or []
     if not isinstance(objects, list):
         raise ConfigError(f"{path}: 'objects' must be a list")
-    return replace(scene, objects=tuple(_parse_object(item, path, index) for index, item in enumerate(objects)))
+    scene = replace(scene, objects=tuple(_parse_object(item, path, index) for index, item in enumerate(objects)))
+    frames = data.get("frames") or {}
+    if not isinstance(frames, dict):
+        raise ConfigError(f"{path}: 'frames' must map each frame's name to its pose and objects")
+    return replace(scene, frames=tuple(_parse_frame(name, item, path, scene) for name, item in frames.items()))
+
+
+def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
+    where = f"frames.{name}"
+    if not isinstance(name, str) or not name.isidentifier() or name == BASE_FRAME:
+        raise ConfigError(f"{path}: frame name {shown(name)} must be a name (letters, digits, _) other than '{BASE_FRAME}'")
+    check_keys(data, ("position", "yaw", "objects", "area"), path, where, required=("position", "objects"))
+    pose = parse_pose({key: data[key] for key in ("position", "yaw") if key in data}, path, where)
+    objects = data["objects"]
+    known = [item.name for item in scene.objects]
+    if not isinstance(objects, list) or not objects or not all(item in known for item in objects):
+        raise ConfigError(f"{path}: '{where}.objects' must list objects of the scene (got {shown(objects)}; known: {', '.join(known)})")
+    area = None
+    if "area" in data:
+        box = check_keys(data["area"], ("lower", "upper"), path, f"{where}.area", required=("lower", "upper"))
+        lower, upper = (vector(box[key], 2, path, f"{where}.area.{key}") for key in ("lower", "upper"))
+        if not all(low < high for low, high in zip(lower, upper)):
+            raise ConfigError(f"{path}: '{where}.area' must have lower < upper in x and y")
+        area = (lower, upper)
+    frame = SceneFrame(name, pose, tuple(str(item) for item in objects), area)  # type: ignore[arg-type]
+    _check_area(frame, pose, str(path))
+    return frame
 
 
 def _parse_control(data: Any, path: Path) -> Control:

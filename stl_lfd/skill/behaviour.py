@@ -7,6 +7,10 @@ for its expected duration plus `settle` seconds, holds the last position during 
 closes the fingers from a grasp until the next release, and joins everything into one
 reference, so the recorded signal is continuous.
 
+A skill learned with frames (a TP-HSMM) is retrieved for the poses of the scene's frames: a
+step's `frames: {MODEL_FRAME: SCENE_FRAME}` binds them, and frames it leaves out are bound to
+the scene frame of the same name.
+
 Grasping attaches the nearest movable object to the hand with a fixed constraint (see
 `stl_lfd.sim.panda.PandaWorld.grasp`); a grasp with nothing in reach fails the rollout.
 """
@@ -15,12 +19,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
+from stl_lfd.poses import Pose
 from stl_lfd.sim import TIME_STEP, Reference
 from stl_lfd.skill.execution import reference_of
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
@@ -36,6 +41,16 @@ class SkillStep:
     model: Path | None
     states: int
     settle: float
+    frames: tuple[tuple[str, str], ...] = ()  # (model frame, scene frame) bindings
+
+    def poses(self, scene_poses: Mapping[str, Pose]) -> dict[str, Pose]:
+        """Model frame -> pose, from the scene's frame poses and this step's bindings."""
+        bound = dict(scene_poses)
+        for model_frame, scene_frame in self.frames:
+            if scene_frame not in scene_poses:
+                raise ConfigError(f"skill {self.name}: its frame {model_frame} is bound to {scene_frame}, which the scene does not have ({', '.join(scene_poses) or 'no frames'})")
+            bound[model_frame] = scene_poses[scene_frame]
+        return bound
 
 
 @dataclass(frozen=True)
@@ -80,7 +95,7 @@ def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:
         if item["action"] not in ACTIONS:
             raise ConfigError(f"{path}: '{where}.action' must be one of {', '.join(ACTIONS)} (got {shown(item['action'])})")
         return ActionStep(item["action"], number(item.get("seconds", 1.0), path, f"{where}.seconds", positive=True))
-    check_keys(item, ("skill", "demos", "model", "states", "settle"), path, where, required=("skill",))
+    check_keys(item, ("skill", "demos", "model", "states", "settle", "frames"), path, where, required=("skill",))
     if ("demos" in item) == ("model" in item):
         raise ConfigError(f"{path}: '{where}' needs exactly one of 'demos' (a folder to learn from) or 'model' (a model file)")
     source_key = "demos" if "demos" in item else "model"
@@ -93,7 +108,14 @@ def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:
         model=source if source_key == "model" else None,
         states=integer(item.get("states", 6), path, f"{where}.states", minimum=1),
         settle=number(item.get("settle", DEFAULT_SETTLE), path, f"{where}.settle", minimum=0.0),
+        frames=_bindings(item.get("frames", {}), path, f"{where}.frames"),
     )
+
+
+def _bindings(data: Any, path: Path, where: str) -> tuple[tuple[str, str], ...]:
+    if not isinstance(data, dict) or not all(isinstance(key, str) and isinstance(value, str) for key, value in data.items()):
+        raise ConfigError(f"{path}: '{where}' must map the model's frames to the scene's (got {shown(data)})")
+    return tuple(data.items())
 
 
 def behaviour_models(behaviour: Behaviour) -> dict[str, HSMM]:
@@ -101,9 +123,13 @@ def behaviour_models(behaviour: Behaviour) -> dict[str, HSMM]:
     return {step.name: learn_from_folder(step.demos, step.states)[0] if step.demos is not None else load_model(step.model) for step in behaviour.skills}
 
 
-def behaviour_reference(behaviour: Behaviour, models: dict[str, HSMM], open_width: float, duration: float | None = None) -> Reference:
+def behaviour_reference(
+    behaviour: Behaviour, models: dict[str, HSMM], open_width: float, duration: float | None = None, poses: Mapping[str, Pose] | None = None
+) -> Reference:
     """One reference for the whole behaviour; padded (holding the last pose) or cut to
-    `duration` seconds when given."""
+    `duration` seconds when given. Skills with frames are retrieved for the scene's frame
+    `poses` (name -> pose)."""
+    poses = poses or {}
     pieces: list[np.ndarray] = []
     grippers: list[np.ndarray] = []
     skills: list[np.ndarray] = []
@@ -113,12 +139,12 @@ def behaviour_reference(behaviour: Behaviour, models: dict[str, HSMM], open_widt
     for step in behaviour.steps:
         if isinstance(step, SkillStep):
             model = models[step.name]
-            skill = reference_of(model, model.expected_duration() + step.settle, step.name)
+            skill = reference_of(model, model.expected_duration() + step.settle, step.name, step.poses(poses))
             positions, names, followed = skill.positions, skill.skills, skill.states
         else:
             events.append((clock, step.action))
             closed = step.action == "grasp"
-            positions = np.repeat(pieces[-1][-1:] if pieces else _first_position(behaviour, models), _steps(step.seconds), axis=0)
+            positions = np.repeat(pieces[-1][-1:] if pieces else _first_position(behaviour, models, poses), _steps(step.seconds), axis=0)
             names, followed = np.full(len(positions), step.action), np.zeros(len(positions), dtype=int)
         pieces.append(positions)
         grippers.append(np.full(len(positions), 0.0 if closed else open_width))
@@ -142,15 +168,19 @@ def _steps(seconds: float) -> int:
     return max(1, int(round(seconds / TIME_STEP)))
 
 
-def _first_position(behaviour: Behaviour, models: dict[str, HSMM]) -> np.ndarray:
-    first = models[behaviour.skills[0].name]
-    return reference_of(first, 2 * first.sample_period_).positions[:1]
+def _first_position(behaviour: Behaviour, models: dict[str, HSMM], poses: Mapping[str, Pose]) -> np.ndarray:
+    step = behaviour.skills[0]
+    first = models[step.name]
+    return reference_of(first, 2 * first.sample_period_, step.name, step.poses(poses)).positions[:1]
 
 
-def reference_for(models: dict[str, HSMM], behaviour: Behaviour | None, open_width: float, duration: float | None = None) -> Reference:
-    """The reference of a behaviour, or of the single skill in `models` when there is none."""
+def reference_for(
+    models: dict[str, HSMM], behaviour: Behaviour | None, open_width: float, duration: float | None = None, poses: Mapping[str, Pose] | None = None
+) -> Reference:
+    """The reference of a behaviour, or of the single skill in `models` when there is none;
+    skills with frames for the frame `poses` of the scene."""
     if behaviour is not None:
-        return behaviour_reference(behaviour, models, open_width, duration)
+        return behaviour_reference(behaviour, models, open_width, duration, poses)
     if len(models) != 1:
         raise ConfigError(f"several skills ({', '.join(models)}) but no behaviour to sequence them")
-    return reference_of(next(iter(models.values())), duration)
+    return reference_of(next(iter(models.values())), duration, poses=poses)

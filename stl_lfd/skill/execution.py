@@ -7,28 +7,42 @@ optimiser, so that every command executes a model the same way.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Mapping
 
 import numpy as np
 
-from stl_lfd.errors import ModelError
-from stl_lfd.hsmm import HSMM, retrieve
+from stl_lfd.errors import ConfigError, ModelError
+from stl_lfd.hsmm import HSMM, TPHSMM, retrieve
+from stl_lfd.poses import BASE_FRAME, Pose
 from stl_lfd.sim import DEFAULT_RATE, SIMULATION_RATE, Backend, Reference, Rollout, Scene, execute, load_scene
 
 POSITION_SIGNALS = ("x", "y", "z")
 
 
-def reference_of(model: HSMM, duration: float | None = None, name: str = "skill") -> Reference:
+def reference_of(model: HSMM, duration: float | None = None, name: str = "skill", poses: Mapping[str, Pose] | None = None) -> Reference:
     """The model's retrieved trajectory at the simulation rate, as a reference to execute; its
-    samples are labelled with the skill's `name` and the (1-based) HSMM state they follow."""
+    samples are labelled with the skill's `name` and the (1-based) HSMM state they follow. A
+    TP-HSMM is retrieved for its frames at `poses` (frame name -> pose)."""
     missing = [name for name in POSITION_SIGNALS if name not in model.signal_names_]
     if missing:
         raise ModelError(f"the model has no signal {', '.join(missing)}: only position skills (x, y, z) can be executed")
-    trajectory = retrieve(model, duration, rate=SIMULATION_RATE)
+    trajectory = retrieve(model, duration, rate=SIMULATION_RATE, poses=skill_poses(model, poses or {}, name))
     columns = [model.signal_names_.index(name) for name in POSITION_SIGNALS]
     gripper = trajectory.positions[:, model.signal_names_.index("gripper")] if "gripper" in model.signal_names_ else None
     skills = np.full(trajectory.times.shape, name)
     return Reference(trajectory.times, trajectory.positions[:, columns], gripper, skills=skills, states=trajectory.states + 1)
+
+
+def skill_poses(model: HSMM, poses: Mapping[str, Pose], name: str = "skill") -> dict[str, Pose]:
+    """The poses of the frames of `model` (none for a plain HSMM), from `poses`; ConfigError
+    naming the frames the scene lacks."""
+    if not isinstance(model, TPHSMM):
+        return {}
+    missing = [frame for frame in model.frame_names_ if frame != BASE_FRAME and frame not in poses]
+    if missing:
+        known = ", ".join(poses) or "none"
+        raise ConfigError(f"the {name} model is learned in frame {', '.join(missing)}, which the scene does not have (its frames: {known})")
+    return {frame: poses[frame] for frame in model.frame_names_ if frame != BASE_FRAME}
 
 
 def rollout_model(
@@ -39,8 +53,9 @@ def rollout_model(
     rate: float = DEFAULT_RATE,
     observer: Callable | None = None,
 ) -> Rollout:
-    """Retrieve and execute `model` for `duration` seconds (default: its expected duration)."""
-    return execute(reference_of(model, duration), scene, backend, rate, observer)
+    """Retrieve and execute `model` for `duration` seconds (default: its expected duration),
+    a TP-HSMM for the poses of the scene's frames of the same names."""
+    return execute(reference_of(model, duration, poses=scene.frame_poses), scene, backend, rate, observer)
 
 
 def scene_with_spec_regions(scene_name: str, spec_path: str | Path | None) -> Scene:

@@ -1,0 +1,161 @@
+"""Task-parameterised HSMM: skills that follow the objects they act on.
+
+Each state has one Gaussian per frame (the robot base and the objects of the demonstrations),
+learned from the demonstrations expressed in every frame, with shared transitions and
+durations (Calinon 2016; Rozo et al. 2020). For new object poses, `TPHSMM.at` transforms each
+frame's Gaussians to the base frame and multiplies them: the result is an ordinary `HSMM`,
+which the state sequence and the tracker use as before.
+
+Poses move the position signals `x, y, z` (rotation about z by the yaw, then translation);
+other signals (a gripper opening) are the same in every frame.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from stl_lfd.errors import ModelError
+from stl_lfd.hsmm.model import HSMM
+from stl_lfd.poses import BASE_FRAME, Pose
+
+POSITION_SIGNALS = ("x", "y", "z")
+
+
+class TPHSMM(HSMM):
+    """An HSMM whose states are Gaussians in P frames at once.
+
+    Learned attributes (besides those of `HSMM`):
+        frame_names_: the P frames; `base` is the robot base frame, fixed at the origin.
+        means_: `K x (P*D)`: each state's mean in frame 1, then in frame 2, ... (D signals each).
+        covars_: `K x P*D x P*D`, block diagonal: the frames are independent given the state.
+        signal_names_: the D signals (as in the demonstrations, base frame).
+    """
+
+    def fit(  # type: ignore[override]
+        self,
+        X: np.ndarray,
+        lengths: np.ndarray,
+        sample_period: float,
+        signal_names: list[str],
+        poses: list[Mapping[str, Pose]],
+        frame_names: list[str],
+    ) -> "TPHSMM":
+        """Learn from demonstrations in the base frame and the poses of their frames.
+
+        Args:
+            X: `N x D` samples of all demonstrations (base frame), concatenated.
+            lengths: samples per demonstration.
+            sample_period: seconds between samples.
+            signal_names: the D signals; must include x, y and z.
+            poses: per demonstration, frame name -> pose (`base` may be left out).
+            frame_names: the P frames to learn in.
+        """
+        signal_names = list(signal_names)
+        _check_positions(signal_names)
+        if not frame_names or len(set(frame_names)) != len(frame_names):
+            raise ModelError(f"frames must be distinct names (got {', '.join(frame_names) or 'none'})")
+        lengths = np.asarray(lengths, dtype=int)
+        if len(poses) != len(lengths):
+            raise ModelError(f"{len(poses)} sets of frame poses for {len(lengths)} demonstrations")
+        self.frame_names_ = list(frame_names)
+        sequences = np.split(np.asarray(X, dtype=float), np.cumsum(lengths)[:-1])
+        local = [np.hstack([_to_frame(sequence, _pose(demo_poses, name), signal_names) for name in self.frame_names_]) for sequence, demo_poses in zip(sequences, poses)]
+        return super().fit(np.concatenate(local), lengths, sample_period, signal_names)  # type: ignore[return-value]
+
+    def at(self, poses: Mapping[str, Pose]) -> HSMM:
+        """The skill for frames at `poses` (name -> pose; every frame but `base` required):
+        an `HSMM` in the base frame whose state Gaussians are the products of the frames'."""
+        self._check()
+        missing = [name for name in self.frame_names_ if name != BASE_FRAME and name not in poses]
+        if missing:
+            raise ModelError(f"no pose for frame {', '.join(missing)} (the model's frames: {', '.join(self.frame_names_)})")
+        D, names = len(self.signal_names_), self.signal_names_
+        means, covars = [], []
+        for index, frame in enumerate(self.frame_names_):
+            rotation, offset = _transform(_pose(poses, frame), names)
+            block = slice(index * D, (index + 1) * D)
+            means.append(self.means_[:, block] @ rotation.T + offset)
+            covars.append(rotation @ self.covars_[:, block, block] @ rotation.T)
+        model = HSMM(self.n_states, self.n_iter, self.tol, self.reg_covar)
+        model.means_, model.covars_ = _product(means, covars)
+        for name in ("duration_means_", "duration_stds_", "transmat_", "startprob_"):
+            setattr(model, name, np.array(getattr(self, name), dtype=float))
+        model.sample_period_, model.signal_names_ = self.sample_period_, list(names)
+        return model
+
+    def frame_means(self, frame: str) -> np.ndarray:
+        """`K x D` state means in `frame`."""
+        index = self._frame_index(frame)
+        D = len(self.signal_names_)
+        return np.asarray(self.means_)[:, index * D : (index + 1) * D]
+
+    @property
+    def feature_names(self) -> list[str]:
+        return [f"{frame}.{name}" for frame in self.frame_names_ for name in self.signal_names_]
+
+    def coordinate(self, name: str, frame: str | None = None) -> int:
+        if frame is None:
+            raise ModelError(f"the model has frames ({', '.join(self.frame_names_)}): say in which one the mean moves ('frame:')")
+        if name not in self.signal_names_:
+            raise ModelError(f"the model has no signal {name} ({', '.join(self.signal_names_)})")
+        return self._frame_index(frame) * len(self.signal_names_) + self.signal_names_.index(name)
+
+    def _frame_index(self, frame: str) -> int:
+        if frame not in self.frame_names_:
+            raise ModelError(f"the model has no frame {frame} (its frames: {', '.join(self.frame_names_)})")
+        return self.frame_names_.index(frame)
+
+    def _check(self) -> None:
+        if not hasattr(self, "frame_names_"):
+            raise ModelError("the model has no frame_names_: fit it or load a model file first")
+        super()._check()
+
+    def _constrained(self, covars: np.ndarray) -> np.ndarray:
+        """Zero the covariance between frames (each frame's block is kept)."""
+        D = covars.shape[-1] // len(self.frame_names_)
+        blocks = np.kron(np.eye(len(self.frame_names_)), np.ones((D, D)))
+        return covars * blocks
+
+
+def _check_positions(signal_names: list[str]) -> None:
+    missing = [name for name in POSITION_SIGNALS if name not in signal_names]
+    if missing:
+        raise ModelError(f"frames move positions, but the demonstrations have no {', '.join(missing)} column")
+
+
+def _pose(poses: Mapping[str, Pose], frame: str) -> Pose:
+    if frame == BASE_FRAME:
+        return poses.get(BASE_FRAME, Pose())
+    if frame not in poses:
+        raise ModelError(f"no pose for frame {frame}")
+    return poses[frame]
+
+
+def _transform(pose: Pose, signal_names: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """`D x D` rotation and `D` offset taking frame coordinates to the base frame."""
+    D = len(signal_names)
+    columns = [signal_names.index(name) for name in POSITION_SIGNALS]
+    rotation, offset = np.eye(D), np.zeros(D)
+    rotation[np.ix_(columns, columns)] = pose.rotation
+    offset[columns] = pose.position
+    return rotation, offset
+
+
+def _to_frame(samples: np.ndarray, pose: Pose, signal_names: list[str]) -> np.ndarray:
+    """`T x D` base-frame samples expressed in the frame at `pose`."""
+    rotation, offset = _transform(pose, signal_names)
+    return (samples - offset) @ rotation
+
+
+def _product(means: list[np.ndarray], covars: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Product of Gaussians, state by state: `K x D` means and `K x D x D` covariances. One
+    frame is returned as it is, so that a model with the base frame alone is the plain HSMM."""
+    if len(means) == 1:
+        return means[0], covars[0]
+    precisions = [np.linalg.inv(covar) for covar in covars]
+    covar = np.linalg.inv(np.sum(precisions, axis=0))
+    weighted = np.sum([np.einsum("kde,ke->kd", precision, mean) for precision, mean in zip(precisions, means)], axis=0)
+    covar = (covar + np.swapaxes(covar, 1, 2)) / 2
+    return np.einsum("kde,ke->kd", covar, weighted), covar

@@ -1,0 +1,75 @@
+"""Object poses: a position in the robot base frame and a yaw about the vertical axis.
+
+A leaf module shared by the skill models (task-parameterised HSMMs are learned in the frames
+of the objects) and the scenes (objects are placed at poses); it imports neither.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from stl_lfd.errors import ConfigError
+from stl_lfd.yamlfile import check_keys, number, vector
+
+BASE_FRAME = "base"  # the robot base frame: always at the origin, never placed
+
+
+@dataclass(frozen=True)
+class Pose:
+    """`position` (x, y, z, metres) and `yaw` (radians, about z) of a frame in the base frame."""
+
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    yaw: float = 0.0
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """`3 x 3` rotation from the frame to the base frame."""
+        cos, sin = math.cos(self.yaw), math.sin(self.yaw)
+        return np.array([[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]])
+
+    def to_base(self, points: np.ndarray) -> np.ndarray:
+        """`N x 3` points given in this frame, expressed in the base frame."""
+        return np.asarray(points) @ self.rotation.T + np.asarray(self.position)
+
+    def from_base(self, points: np.ndarray) -> np.ndarray:
+        """`N x 3` base-frame points, expressed in this frame."""
+        return (np.asarray(points) - np.asarray(self.position)) @ self.rotation
+
+    def compose(self, other: "Pose") -> "Pose":
+        """This transform applied after `other`: the pose `other` takes when the whole world
+        is moved by this one."""
+        return Pose(tuple(float(v) for v in self.to_base(np.asarray(other.position)[None])[0]), self.yaw + other.yaw)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"position": [float(v) for v in self.position], "yaw": float(self.yaw)}
+
+
+def parse_pose(data: Any, path: Path | str, where: str) -> Pose:
+    """A pose from YAML: `{position: [x, y, z], yaw: RAD}` (yaw optional, default 0)."""
+    check_keys(data, ("position", "yaw"), path, where, required=("position",))
+    position = vector(data["position"], 3, path, f"{where}.position")
+    return Pose(position, number(data.get("yaw", 0.0), path, f"{where}.yaw"))
+
+
+def parse_assignment(text: str, option: str, default: Pose | None = None) -> tuple[str, Pose]:
+    """`NAME=x,y[,z[,yaw]]` from the command line (yaw in radians). Without z (or yaw), the
+    `default` pose's value is kept; without a default, z is required."""
+    name, equals, numbers = text.partition("=")
+    usage = f"{option} {text}: expected NAME=x,y,z[,yaw] (metres, radians)"
+    if not equals or not name.strip():
+        raise ConfigError(usage)
+    try:
+        values = [float(part) for part in numbers.split(",")]
+    except ValueError:
+        raise ConfigError(usage) from None
+    shortest = 2 if default is not None else 3
+    if not shortest <= len(values) <= 4 or not all(math.isfinite(v) for v in values):
+        raise ConfigError(usage if default is None else f"{option} {text}: expected NAME=x,y[,z[,yaw]] (metres, radians)")
+    base = default or Pose()
+    position = (values[0], values[1], values[2] if len(values) > 2 else base.position[2])
+    return name.strip(), Pose(position, values[3] if len(values) > 3 else base.yaw)
