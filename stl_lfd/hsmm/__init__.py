@@ -7,4 +7,16 @@ from stl_lfd.hsmm.model import HSMM
 from stl_lfd.hsmm.retrieval import Trajectory, retrieve
 from stl_lfd.hsmm.tp import TPHSMM
 
-__all__ = ["HSMM", "TPHSMM", "Trajectory", "learn", "learn_from_folder", "load_demo_frames", "load_demos", "load_model", "retrieve", "save_model", "summary_rows"]
+__all__ = [
+    "HSMM",
+    "TPHSMM",
+    "Trajectory",
+    "learn",
+    "learn_from_folder",
+    "load_demo_frames",
+    "load_demos",
+    "load_model",
+    "retrieve",
+    "save_model",
+    "summary_rows",
+]

@@ -61,7 +61,10 @@ class TPHSMM(HSMM):
             raise ModelError(f"{len(poses)} sets of frame poses for {len(lengths)} demonstrations")
         self.frame_names_ = list(frame_names)
         sequences = np.split(np.asarray(X, dtype=float), np.cumsum(lengths)[:-1])
-        local = [np.hstack([_to_frame(sequence, _pose(demo_poses, name), signal_names) for name in self.frame_names_]) for sequence, demo_poses in zip(sequences, poses)]
+        local = [
+            np.hstack([_to_frame(sequence, _pose(demo_poses, name), signal_names) for name in self.frame_names_])
+            for sequence, demo_poses in zip(sequences, poses)
+        ]
         return super().fit(np.concatenate(local), lengths, sample_period, signal_names)  # type: ignore[return-value]
 
     def at(self, poses: Mapping[str, Pose]) -> HSMM:

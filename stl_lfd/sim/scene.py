@@ -183,8 +183,7 @@ def _check_area(frame: SceneFrame, pose: Pose, source: str) -> None:
     x, y = pose.position[0], pose.position[1]
     if not (x_low <= x <= x_high and y_low <= y <= y_high):
         raise ConfigError(
-            f"{source}: {frame.name} at ({x:g}, {y:g}) is outside the area it may be placed in "
-            f"(x {x_low:g} to {x_high:g}, y {y_low:g} to {y_high:g})"
+            f"{source}: {frame.name} at ({x:g}, {y:g}) is outside the area it may be placed in (x {x_low:g} to {x_high:g}, y {y_low:g} to {y_high:g})"
         )
 
 

@@ -48,7 +48,9 @@ class SkillStep:
         bound = dict(scene_poses)
         for model_frame, scene_frame in self.frames:
             if scene_frame not in scene_poses:
-                raise ConfigError(f"skill {self.name}: its frame {model_frame} is bound to {scene_frame}, which the scene does not have ({', '.join(scene_poses) or 'no frames'})")
+                raise ConfigError(
+                    f"skill {self.name}: its frame {model_frame} is bound to {scene_frame}, which the scene does not have ({', '.join(scene_poses) or 'no frames'})"
+                )
             bound[model_frame] = scene_poses[scene_frame]
         return bound
 
