@@ -147,35 +147,47 @@ def learn(
         None, "--sample-period", help="Resample the demos to this period in seconds (default: their median period, at most 50 Hz)."
     ),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Also draw demos, states and retrieval into this PNG."),
+    frames: Optional[str] = typer.Option(
+        None, "--frames", help="Frames to learn in, comma-separated (default with frame sidecars: base and every frame they give)."
+    ),
 ) -> None:
     """Learn a skill model (HSMM) from demonstrations and write the model file.
 
-    Prints one row per state on stdout: mean position, duration mean and standard deviation
-    in seconds, and the most likely successor.
+    Demonstrations with frame sidecars (demo_01.frames.yaml beside demo_01.csv: the poses of the
+    objects) give a task-parameterised model (TP-HSMM) that follows the objects: learned in the
+    robot base frame and in each object's frame, retrieved for new object poses.
 
-    Example:
+    Prints one row per state on stdout: mean position (base frame; for a TP-HSMM, at the
+    demonstrations' first frame poses), duration mean and standard deviation in seconds, and
+    the most likely successor.
+
+    Examples:
 
     \b
         stlopt learn demos/three_regions -o three_regions.npz --plot skill.png
+        stlopt learn demos/insert -o insert.npz --frames shaft,holder
     """
     from stl_lfd.files import atomic_output, check_output_file
-    from stl_lfd.hsmm import learn_from_folder, retrieve, save_model, summary_rows
+    from stl_lfd.hsmm import TPHSMM, demonstrated_skill, learn_from_folder, retrieve, save_model, summary_rows
 
     with user_errors():
         check_output_file(output, (".npz",), "model file")
         if plot is not None:
             check_output_file(plot, FIGURE_SUFFIXES, "figure")
-        model, sequences = learn_from_folder(demos_dir, states, sample_period)
+        chosen = [name.strip() for name in frames.split(",")] if frames is not None else None
+        model, sequences = learn_from_folder(demos_dir, states, sample_period, chosen)
         save_model(model, output)
+        shown_model = demonstrated_skill(model, demos_dir)
         if plot is not None:
             from stl_lfd.report.skill import skill_figure
 
-            trajectory = retrieve(model)
-            figure = skill_figure(sequences, model.means_, model.covars_, trajectory.positions, model.sample_period_, model.signal_names_)
+            trajectory = retrieve(shown_model)
+            figure = skill_figure(sequences, shown_model.means_, shown_model.covars_, trajectory.positions, model.sample_period_, model.signal_names_)
             with atomic_output(plot) as temporary:
                 figure.savefig(temporary, dpi=110)
-    _print_summary(summary_rows(model), model.signal_names_)
-    print(f"wrote {output} ({len(sequences)} demonstrations, K = {states}, {len(model.monitor_.history)} EM iterations)", file=sys.stderr)
+    _print_summary(summary_rows(shown_model), model.signal_names_)
+    learned_in = f", frames {', '.join(model.frame_names_)}" if isinstance(model, TPHSMM) else ""
+    print(f"wrote {output} ({len(sequences)} demonstrations, K = {states}{learned_in}, {len(model.monitor_.history)} EM iterations)", file=sys.stderr)
 
 
 def _print_summary(rows: list[dict], names: list[str]) -> None:
@@ -193,18 +205,23 @@ def retrieve(
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="CSV to write (default: stdout)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to retrieve (default: the model's expected duration)."),
     rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second of the output (default: the model's rate)."),
+    frame: list[str] = typer.Option(
+        [], "--frame", help="For a model learned with frames: NAME=x,y,z[,yaw] (metres, yaw in radians), once per frame of the model."
+    ),
 ) -> None:
     """Write the reference trajectory of a skill model as a signal CSV.
 
     Columns: t, the model's signals (x, y, z, ...) and `state`, the HSMM state followed (1-based).
+    A model learned with frames (TP-HSMM) is retrieved for the object poses given by --frame.
 
-    Example:
+    Examples:
 
     \b
         stlopt retrieve three_regions.npz --rate 240 -o reference.csv
+        stlopt retrieve insert.npz --frame shaft=0.45,-0.25,0.08 --frame holder=0.6,0.2,0.04,0.3
     """
     from stl_lfd.files import check_output_file
-    from stl_lfd.hsmm import load_model
+    from stl_lfd.hsmm import frame_poses, load_model
     from stl_lfd.hsmm import retrieve as retrieve_trajectory
     from stl_lfd.signals import SignalTable, write_signal_csv
 
@@ -212,8 +229,9 @@ def retrieve(
         if output is not None:
             check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
         model = load_model(model_file)
+        poses = frame_poses(model, frame, model_file)
         try:
-            trajectory = retrieve_trajectory(model, duration, rate)
+            trajectory = retrieve_trajectory(model, duration, rate, poses=poses)
         except ModelError as error:
             whose = "" if duration is not None else f" (its expected duration, {model.expected_duration():.3g} s)"
             raise ModelError(f"{model_file}{whose}: {error}") from None

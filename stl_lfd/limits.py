@@ -15,6 +15,7 @@ MAX_TRIALS = 10_000  # trials of one run
 MAX_SEED = 2**32 - 1  # what numpy and torch accept
 MAX_STATES = 200  # HSMM states
 MAX_WORKERS = 256  # parallel trials of one run (one process each)
+MAX_PLACEMENTS = 64  # object placements a trial executes at (one rollout each)
 
 
 def samples_problem(duration: float | None, rate: float) -> str:

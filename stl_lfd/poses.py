@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -56,20 +56,30 @@ def parse_pose(data: Any, path: Path | str, where: str) -> Pose:
     return Pose(position, number(data.get("yaw", 0.0), path, f"{where}.yaw"))
 
 
-def parse_assignment(text: str, option: str, default: Pose | None = None) -> tuple[str, Pose]:
-    """`NAME=x,y[,z[,yaw]]` from the command line (yaw in radians). Without z (or yaw), the
-    `default` pose's value is kept; without a default, z is required."""
+def parse_assignment(text: str, option: str, defaults: Mapping[str, Pose] | None = None) -> tuple[str, Pose]:
+    """`NAME=x,y,z[,yaw]` from the command line (metres, yaw in radians).
+
+    With `defaults` (frame name -> current pose, as a scene has them), NAME must be one of
+    them and `NAME=x,y[,z[,yaw]]` keeps the default's z and yaw when left out."""
     name, equals, numbers = text.partition("=")
-    usage = f"{option} {text}: expected NAME=x,y,z[,yaw] (metres, radians)"
-    if not equals or not name.strip():
+    name = name.strip()
+    shape = "NAME=x,y[,z[,yaw]]" if defaults is not None else "NAME=x,y,z[,yaw]"
+    usage = f"{option} {text}: expected {shape} (metres, yaw in radians)"
+    if not equals or not name:
         raise ConfigError(usage)
+    if defaults is not None and name not in defaults:
+        raise ConfigError(f"{option} {text}: no frame '{name}' (frames: {', '.join(defaults) or 'none'})")
     try:
         values = [float(part) for part in numbers.split(",")]
     except ValueError:
         raise ConfigError(usage) from None
-    shortest = 2 if default is not None else 3
+    shortest = 2 if defaults is not None else 3
     if not shortest <= len(values) <= 4 or not all(math.isfinite(v) for v in values):
-        raise ConfigError(usage if default is None else f"{option} {text}: expected NAME=x,y[,z[,yaw]] (metres, radians)")
-    base = default or Pose()
-    position = (values[0], values[1], values[2] if len(values) > 2 else base.position[2])
-    return name.strip(), Pose(position, values[3] if len(values) > 3 else base.yaw)
+        raise ConfigError(usage)
+    return name, pose_from_values(values, defaults[name] if defaults is not None else Pose())
+
+
+def pose_from_values(values: list[float], default: Pose) -> Pose:
+    """A pose from `[x, y]`, `[x, y, z]` or `[x, y, z, yaw]`, the rest from `default`."""
+    position = (values[0], values[1], values[2] if len(values) > 2 else default.position[2])
+    return Pose(position, values[3] if len(values) > 3 else default.yaw)

@@ -2,7 +2,7 @@
 
 from stl_lfd.hsmm.demos import load_demo_frames, load_demos
 from stl_lfd.hsmm.io import load_model, save_model
-from stl_lfd.hsmm.learn import learn, learn_from_folder, summary_rows
+from stl_lfd.hsmm.learn import demonstrated_skill, frame_poses, learn, learn_from_folder, summary_rows
 from stl_lfd.hsmm.model import HSMM
 from stl_lfd.hsmm.retrieval import Trajectory, retrieve
 from stl_lfd.hsmm.tp import TPHSMM
@@ -11,6 +11,8 @@ __all__ = [
     "HSMM",
     "TPHSMM",
     "Trajectory",
+    "demonstrated_skill",
+    "frame_poses",
     "learn",
     "learn_from_folder",
     "load_demo_frames",

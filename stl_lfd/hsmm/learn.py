@@ -12,7 +12,7 @@ from stl_lfd.hsmm.demos import SIDECAR_SUFFIX, load_demo_frames, load_demos, med
 from stl_lfd.hsmm.model import HSMM
 from stl_lfd.hsmm.tp import TPHSMM
 from stl_lfd.limits import MAX_STATES, samples_problem
-from stl_lfd.poses import BASE_FRAME, Pose
+from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment
 from stl_lfd.signals import SignalTable
 
 # Demonstrations are resampled no finer than this (s): hand-guided motions have no content
@@ -115,3 +115,29 @@ def summary_rows(model: HSMM) -> list[dict]:
             }
         )
     return rows
+
+
+def demonstrated_skill(model: HSMM, folder: str | Path) -> HSMM:
+    """`model` itself, or for a TP-HSMM the skill at the first demonstration's frame poses
+    (what `stlopt learn` prints and draws)."""
+    if not isinstance(model, TPHSMM):
+        return model
+    poses = load_demo_frames(load_demos(folder))
+    return model.at(poses[0] if poses else {})
+
+
+def frame_poses(model: HSMM, assignments: list[str], source: str | Path, option: str = "--frame") -> dict[str, Pose]:
+    """Frame name -> pose from `NAME=x,y,z[,yaw]` texts: every frame of a TP-HSMM but `base`,
+    none for a plain HSMM."""
+    frames = [name for name in getattr(model, "frame_names_", []) if name != BASE_FRAME]
+    poses: dict[str, Pose] = {}
+    for text in assignments:
+        name, pose = parse_assignment(text, option)
+        if name not in frames:
+            known = f"its frames: {', '.join(frames)}" if frames else "it was learned without frames"
+            raise ModelError(f"{option} {text}: the model {source} has no frame '{name}' ({known})")
+        poses[name] = pose
+    missing = [name for name in frames if name not in poses]
+    if missing:
+        raise ModelError(f"{source}: the model follows frames {', '.join(frames)}; give the pose of {', '.join(missing)} ({option} NAME=x,y,z[,yaw])")
+    return poses

@@ -20,7 +20,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from stl_lfd.errors import ExecutionError, RunError, SignalError
+from stl_lfd.errors import ConfigError, ExecutionError, RunError, SignalError
 from stl_lfd.optim.loop import Outcome, Trial, next_point
 from stl_lfd.optim.resume import check_resume
 from stl_lfd.optim.run import Recorder, SkillObjective, objective_for, prepared_from, task_models
@@ -58,6 +58,8 @@ class Told:
 def ask_new(task: Task, out: Path, inputs: dict[str, Any], learn_progress: Callable[[str], None] = lambda message: None) -> Asked:
     """Create the run directory `out` for `task`, with trial 0 (the unoptimised skill) pending."""
     check_new_run_path(Path(out))
+    if len(task.placements) > 1:
+        raise ConfigError(f"{task.source}: stlopt ask hands out one reference per trial, so it takes one placement ('place'), not {len(task.placements)}")
     if task.model is None:
         learn_progress(f"learning the skills of {task.source.name}")
     models = task_models(task)
@@ -96,7 +98,7 @@ def ask(
         recorder, objective = Recorder(prepared), prepared.objective
         while len(recorder.history) < task.optimizer.trials:
             start = time.perf_counter()
-            x, phase = next_point(recorder.history, prepared.space.bounds, task.optimizer, objective.parts)
+            x, phase = next_point(recorder.history, prepared.space.bounds, task.optimizer, objective.composition)
             number = len(recorder.history) + 1
             try:
                 reference = objective.reference(prepared.space.apply(prepared.models, x))

@@ -15,12 +15,12 @@ from pathlib import Path
 from typing import Any
 
 from stl_lfd.errors import RunError
-from stl_lfd.optim.task import Task
+from stl_lfd.optim.task import Task, placements_to_yaml
 
 # Command-line overrides, by their `Task.with_overrides` name, as the CLI spells them.
 OPTIONS = {
     "spec": "--spec", "initial": "--init", "seed": "--seed", "backend": "--backend", "command": "--command", "method": "--method", "trials": "--iterations",
-    "workers": "--workers",
+    "workers": "--workers", "placements": "--place",
 }  # fmt: skip
 # Settings that may differ on resume: the budget, and the name (a label, not part of the problem).
 MAY_CHANGE = ("name",)
@@ -100,7 +100,7 @@ def _first_difference(ours: Any, theirs: Any, key: str = "") -> tuple[str, Any, 
 
 
 def _setting(task: Task, key: str) -> Any:
-    return task.spec if key == "spec" else getattr(task, key) if key in ("backend", "command") else getattr(task.optimizer, key)
+    return task.spec if key == "spec" else getattr(task, key) if key in ("backend", "command", "placements") else getattr(task.optimizer, key)
 
 
 def _plain(value: Any) -> Any:
@@ -109,6 +109,8 @@ def _plain(value: Any) -> Any:
         return str(value.resolve())
     if hasattr(value, "to_dict"):  # a Command
         return value.to_dict()
+    if isinstance(value, tuple) and all(isinstance(item, dict) for item in value):  # placements
+        return placements_to_yaml(value)
     return getattr(value, "value", value)
 
 

@@ -19,22 +19,45 @@ from stl_lfd.optim.space import SearchSpace, build_search_space
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import SINGLE_SKILL, Task
 from stl_lfd.signals import SignalTable
-from stl_lfd.sim import RECORDED_SIGNALS, Backend, CommandBackend, Reference, Scene, execute, load_scene, new_backend
+from stl_lfd.sim import Backend, CommandBackend, Reference, Scene, execute, load_scene, new_backend
 from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
-from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
+from stl_lfd.stl import Semantics, SpecParts, ast, load_spec, split_spec
+
+
+@dataclass(frozen=True)
+class Placements:
+    """How the robustness at several object placements composes: the worst of them. Offers what
+    the optimiser reads of `SpecParts` (`names`, `semantics`), so that composite BO models each
+    placement's robustness with its own GP output and takes their minimum."""
+
+    names: tuple[str, ...]
+    semantics: Semantics = Semantics("classic")
 
 
 class SkillObjective:
     """x -> adapted models -> (behaviour) reference -> rollout -> robustness of the recorded
     signals and of the spec's top-level parts (payload: the signals). It owns its backend (one
     simulated world for all its rollouts) until `close`; without a backend (`execute=False` in
-    `objective_for`) it only scores signals recorded elsewhere."""
+    `objective_for`) it only scores signals recorded elsewhere.
+
+    With several object placements (`task.placements`), a trial executes once per placement and
+    its robustness is the worst; its parts are then the placements' robustness values, and its
+    payload the signals of the worst placement."""
 
     def __init__(
         self, models: dict[str, HSMM], space: SearchSpace, task: Task, behaviour: Behaviour | None, scene: Scene, parts: SpecParts, backend: Backend | None
     ) -> None:
-        self.models, self.space, self.task, self.behaviour, self.scene, self.parts = models, space, task, behaviour, scene, parts
+        self.models, self.space, self.task, self.behaviour, self.parts = models, space, task, behaviour, parts
+        self.scenes = [scene.place(placement, str(task.source)) for placement in task.placements] or [scene]
+        self.scene = self.scenes[0]
         self.backend = backend
+
+    @property
+    def composition(self) -> SpecParts | Placements:
+        """The parts the optimiser models: the spec's, or one per placement."""
+        if len(self.scenes) == 1:
+            return self.parts
+        return Placements(tuple(placement_label(index, placement) for index, placement in enumerate(self.task.placements)))
 
     def close(self) -> None:
         if self.backend is not None:
@@ -48,9 +71,11 @@ class SkillObjective:
     def __call__(self, x: np.ndarray, trial: int = 0) -> Outcome:
         return self.evaluate(self.space.apply(self.models, x), trial)
 
-    def reference(self, models: dict[str, HSMM]) -> Reference:
-        """What executing `models` means: the behaviour's (or single skill's) reference."""
-        return reference_for(models, self.behaviour, self.scene.gripper_opening, self.task.duration, self.scene.frame_poses)
+    def reference(self, models: dict[str, HSMM], scene: Scene | None = None) -> Reference:
+        """What executing `models` means: the behaviour's (or single skill's) reference, for the
+        object frames of `scene` (default: the first placement)."""
+        scene = self.scene if scene is None else scene
+        return reference_for(models, self.behaviour, scene.gripper_opening, self.task.duration, scene.frame_poses)
 
     def evaluate(self, models: dict[str, HSMM], trial: int = 0) -> Outcome:
         """Execute `models` as trial `trial` (0: the unoptimised skill) and score the signals."""
@@ -58,7 +83,11 @@ class SkillObjective:
             raise ExecutionError("this objective only scores signals recorded elsewhere (it has no backend)")
         if isinstance(self.backend, CommandBackend):
             self.backend.trial = trial
-        return self.score(execute(self.reference(models), self.scene, self.backend, self.task.rate).signals)
+        outcomes = [self.score(execute(self.reference(models, scene), scene, self.backend, self.task.rate).signals) for scene in self.scenes]
+        if len(outcomes) == 1:
+            return outcomes[0]
+        worst = min(outcomes, key=lambda outcome: outcome.robustness)
+        return Outcome(worst.robustness, worst.payload, dict(zip(self.composition.names, (outcome.robustness for outcome in outcomes))))
 
     def score(self, signals: SignalTable) -> Outcome:
         """The robustness of recorded `signals`, and of each of the spec's parts."""
@@ -115,13 +144,22 @@ def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = N
             f"{task.source}: the spec {task.spec.name} looks {horizon:g} s ahead but rollouts last "
             f"{task.duration:g} s ('duration'); lengthen the rollouts or shorten the spec's windows"
         )
-    recorded = set(RECORDED_SIGNALS)
+    scene = load_scene(task.scene)
+    recorded = set(scene.recorded_signals)
     unknown = sorted(parts.signals - recorded)
     if unknown:
-        raise SpecError(f"signal {', '.join(unknown)} is not recorded by rollouts (they record {', '.join(sorted(recorded))})", str(task.spec))
+        raise SpecError(f"signal {', '.join(unknown)} is not recorded by rollouts in the scene {scene.name} (they record {', '.join(scene.recorded_signals)})", str(task.spec))
+    if len(task.placements) > 1 and task.backend == "command":
+        raise ConfigError(f"{task.source}: several placements need a simulated backend (the command backend executes one reference per trial)")
     behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None
     backend = new_backend(task.backend, task.command) if execute else None
-    return space, SkillObjective(models, space, task, behaviour, load_scene(task.scene), parts, backend)
+    return space, SkillObjective(models, space, task, behaviour, scene, parts, backend)
+
+
+def placement_label(index: int, placement: dict) -> str:
+    """`placement 2 (holder 0.6,0.25,0.04 yaw 0.3)`: how a placement's robustness is named."""
+    poses = ", ".join(f"{name} {','.join(f'{v:g}' for v in pose.position)} yaw {pose.yaw:g}" for name, pose in placement.items())
+    return f"placement {index + 1} ({poses})"
 
 
 def prepare_objective(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = None) -> tuple[SearchSpace, SkillObjective, Outcome, Summary]:
@@ -249,7 +287,7 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
 
         pool = WorkerPool(prepared.task, prepared.models, getattr(prepared.run, "path", None), workers)
     try:
-        run_trials(objective, prepared.space.bounds, prepared.task.optimizer, prepared.history, record, prepared.objective.parts, pool)
+        run_trials(objective, prepared.space.bounds, prepared.task.optimizer, prepared.history, record, prepared.objective.composition, pool)
     except BaseException:
         if pool is not None:
             pool.stop()  # now: the trials in flight are lost, as with one worker

@@ -3,7 +3,8 @@ becomes a model.
 
 A point `x` is a `d` vector, ordered: the selected state means (state by state, coordinate by
 coordinate), the selected duration means, then the selected transition entries. Bounds follow
-the paper: mean +- beta standard deviations of the state's covariance per coordinate (states
+the paper: mean +- beta standard deviations of the state's covariance per coordinate (in the
+chosen frame for a TP-HSMM, whose means move in that frame; states
 moved `together` share one position parameter per coordinate, bounded by the smallest of
 their standard deviations), duration
 mean +- width duration standard deviations (never below one sample period), and [0, 1] for
@@ -18,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stl_lfd.errors import ConfigError
+from stl_lfd.errors import ConfigError, ModelError
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim.task import SINGLE_SKILL, Parameters
 
@@ -96,11 +97,13 @@ def build_space(model: HSMM, parameters: Parameters, source: Path | str = "task"
         stds = np.min([np.sqrt(np.diag(model.covars_[state])) for state in group], axis=0)
         label = "+".join(str(state + 1) for state in group)
         for name in means.coordinates:
-            if name not in model.signal_names_:
-                raise ConfigError(f"{source}: 'parameters.means.coordinates' names {name}, which the model does not have ({', '.join(model.signal_names_)})")
-            coordinate = model.signal_names_.index(name)
+            try:
+                coordinate = model.coordinate(name, means.frame)
+            except ModelError as error:
+                raise ConfigError(f"{source}: 'parameters.means': {error}") from None
             value, spread = model.means_[group[0], coordinate], means.beta * stds[coordinate]
-            add(f"mean[{label}].{name}", value, value - spread, value + spread)
+            frame = f"{means.frame}." if means.frame is not None else ""
+            add(f"mean[{label}].{frame}{name}", value, value - spread, value + spread)
             mean_slots.append((group, coordinate))
 
     durations = parameters.durations

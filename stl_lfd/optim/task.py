@@ -14,7 +14,8 @@ from typing import Any, Iterator
 
 from stl_lfd.choices import BACKENDS, METHODS, SEMANTICS
 from stl_lfd.errors import ConfigError
-from stl_lfd.limits import MAX_SEED, MAX_STATES, MAX_TRIALS, MAX_WORKERS, samples_problem
+from stl_lfd.limits import MAX_PLACEMENTS, MAX_SEED, MAX_STATES, MAX_TRIALS, MAX_WORKERS, samples_problem
+from stl_lfd.poses import Pose
 from stl_lfd.sim.command import DEFAULT_TIMEOUT, Command
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
@@ -26,12 +27,15 @@ COORDINATES = ("x", "y", "z")
 @dataclass(frozen=True)
 class MeanParameters:
     """State means to optimise: `components` (1-based), `coordinates`, bounds mean +- beta std;
-    `together` moves the components by one shared offset (e.g. an approach and a final pose)."""
+    `together` moves the components by one shared offset (e.g. an approach and a final pose);
+    `frame` names the frame of a TP-HSMM in which they move (bounds from that frame's
+    covariance)."""
 
     components: tuple[int, ...] = ()
     coordinates: tuple[str, ...] = COORDINATES
     beta: float = 2.0
     together: bool = False
+    frame: str | None = None  # for a TP-HSMM: the frame the means move in
 
     def __post_init__(self) -> None:
         _check_states(self.components, "means.components")
@@ -118,7 +122,9 @@ class Task:
 
     The skills come from `demos` (learned with `states` states), a `model` file, or a
     `behaviour` file (several skills and gripper actions). `parameters` maps each skill name
-    (`skill` for a single skill) to what is optimised in it.
+    (`skill` for a single skill) to what is optimised in it. `placements` lists where the
+    scene's object frames stand (frame -> pose, the others at the scene's poses); each trial
+    executes once per placement and scores the worst. Empty: the scene as it is.
     """
 
     name: str
@@ -137,13 +143,14 @@ class Task:
     optimizer: Optimizer
     source: Path
     command: Command | None = None
+    placements: tuple[dict[str, Pose], ...] = ()
 
     def __post_init__(self) -> None:
         if self.backend == "command" and self.command is None:
             raise ConfigError(f"{self.source}: the command backend needs the command that executes a trial ('command' in the task file, or --command)")
 
     def with_overrides(self, **changes: Any) -> "Task":
-        """A copy with command-line overrides (`spec`, `backend`, `command`, `seed`, `initial`, `trials`, `method`)."""
+        """A copy with command-line overrides (`spec`, `backend`, `command`, `placements`, `seed`, `initial`, `trials`, `method`)."""
         optimizer_keys = {"seed", "initial", "trials", "method", "workers"}
         with _located(self.source):
             optimizer = replace(self.optimizer, **{k: v for k, v in changes.items() if k in optimizer_keys and v is not None})
@@ -162,6 +169,8 @@ class Task:
         data.update(scene=self.scene, backend=self.backend, semantics=self.semantics, nu=self.nu, duration=self.duration, rate=self.rate)
         if self.command is not None:
             data["command"] = self.command.to_dict()
+        if self.placements:
+            data["placements"] = placements_to_yaml(self.placements)
         blocks = {name: _parameters_to_yaml(parameters) for name, parameters in self.parameters.items()}
         data["parameters"] = blocks[SINGLE_SKILL] if self.behaviour is None else blocks
         opt = self.optimizer
@@ -187,7 +196,14 @@ TOP_KEYS = (
     "rate",
     "parameters",
     "optimizer",
+    "place",
+    "placements",
 )
+
+
+def placements_to_yaml(placements: tuple[dict[str, Pose], ...]) -> list[dict[str, Any]]:
+    """The task-file form of `placements`: a list of frame -> {position, yaw}."""
+    return [{name: pose.as_dict() for name, pose in placement.items()} for placement in placements]
 
 
 def _parameters_to_yaml(parameters: Parameters) -> dict[str, Any]:
@@ -196,6 +212,8 @@ def _parameters_to_yaml(parameters: Parameters) -> dict[str, Any]:
     block: dict[str, Any] = {}
     if means.components:
         block["means"] = {"components": list(means.components), "coordinates": list(means.coordinates), "beta": means.beta, "together": means.together}
+        if means.frame is not None:
+            block["means"]["frame"] = means.frame
     if durations.components:
         components = durations.components if isinstance(durations.components, str) else list(durations.components)
         block["durations"] = {"components": components, "width": durations.width}
@@ -236,6 +254,8 @@ def parse_task(data: dict[str, Any], path: Path) -> Task:
         source=path,
         command=_command(data["command"], path) if "command" in data else None,
     )
+    if "place" in data or "placements" in data:
+        task = replace(task, placements=_placements(data, path, task.scene))
     problem = samples_problem(task.duration, task.rate)
     if problem:
         raise ConfigError(f"{path}: 'duration' and 'rate': {problem}")
@@ -257,6 +277,21 @@ def _behaviour_scene(behaviour: Path) -> str:
     return load_behaviour(behaviour).scene
 
 
+def _placements(data: dict[str, Any], path: Path, scene_name: str) -> tuple[dict[str, Pose], ...]:
+    """`place: {FRAME: POSE}` (one placement) or `placements: [{FRAME: POSE}, ...]`."""
+    from stl_lfd.sim import load_scene
+
+    if "place" in data and "placements" in data:
+        raise ConfigError(f"{path}: give 'place' (one placement) or 'placements' (several), not both")
+    scene = load_scene(scene_name)
+    if "place" in data:
+        return (scene.placement_from_yaml(data["place"], path, "place"),)
+    items = data["placements"]
+    if not isinstance(items, list) or not items or len(items) > MAX_PLACEMENTS:
+        raise ConfigError(f"{path}: 'placements' must be a list of 1 to {MAX_PLACEMENTS} placements (each mapping frames to poses)")
+    return tuple(scene.placement_from_yaml(item, path, f"placements[{index}]") for index, item in enumerate(items))
+
+
 def _skill_parameters(data: Any, path: Path, behaviour: Path | None) -> dict[str, Parameters]:
     """`parameters` of a single-skill task, or per skill of a behaviour."""
     if behaviour is None:
@@ -275,7 +310,9 @@ def _parameters(data: Any, path: Path, where: str) -> Parameters:
     check_keys(data, ("means", "durations", "transitions"), path, where)
     means, durations = MeanParameters(), DurationParameters()
     if "means" in data:
-        item = check_keys(data["means"], ("components", "coordinates", "beta", "together"), path, f"{where}.means", required=("components",))
+        item = check_keys(data["means"], ("components", "coordinates", "beta", "together", "frame"), path, f"{where}.means", required=("components",))
+        if "frame" in item and not isinstance(item["frame"], str):
+            raise ConfigError(f"{path}: '{where}.means.frame' must be the name of one of the model's frames (got {shown(item['frame'])})")
         if not isinstance(item.get("together", False), bool):
             raise ConfigError(f"{path}: '{where}.means.together' must be true or false")
         coordinates = tuple(item.get("coordinates", COORDINATES))
@@ -287,6 +324,7 @@ def _parameters(data: Any, path: Path, where: str) -> Parameters:
             coordinates=coordinates,
             beta=number(item.get("beta", 2.0), path, f"{where}.means.beta", positive=True),
             together=item.get("together", False),
+            frame=item.get("frame"),
         )
     if "durations" in data:
         item = check_keys(data["durations"], ("components", "width"), path, f"{where}.durations", required=("components",))

@@ -17,7 +17,7 @@ import numpy as np
 
 from stl_lfd.choices import RECORDED_SIGNALS
 from stl_lfd.errors import ConfigError
-from stl_lfd.poses import BASE_FRAME, Pose, parse_pose
+from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment, parse_pose, pose_from_values
 from stl_lfd.sim.safety import Safety
 from stl_lfd.yamlfile import check_keys, number, read_yaml, shown, vector
 
@@ -142,6 +142,34 @@ class Scene:
     def recorded_signals(self) -> tuple[str, ...]:
         """What a rollout in this scene records: `RECORDED_SIGNALS` and each frame's position."""
         return RECORDED_SIGNALS + tuple(signal for frame in self.frames for signal in frame.signals)
+
+    def placement_from_options(self, texts: list[str], option: str = "--place") -> dict[str, Pose]:
+        """Frame name -> pose from `NAME=x,y[,z[,yaw]]` texts (z and yaw default to the frame's)."""
+        placement: dict[str, Pose] = {}
+        for text in texts:
+            name, pose = parse_assignment(text, option, self.frame_poses)
+            if name in placement:
+                raise ConfigError(f"{option} {text}: {name} is placed twice")
+            placement[name] = pose
+        return placement
+
+    def placement_from_yaml(self, data: Any, path: Path | str, where: str) -> dict[str, Pose]:
+        """Frame name -> pose from a mapping of `NAME: [x, y(, z(, yaw))]` or `NAME: {position:
+        [x, y, z], yaw: RAD}` (z and yaw default to the frame's), checked against the scene."""
+        if not isinstance(data, dict) or not data:
+            raise ConfigError(f"{path}: '{where}' must map frames of the scene {self.name} to poses (its frames: {', '.join(self.frame_poses) or 'none'})")
+        placement = {}
+        for name, value in data.items():
+            if name not in self.frame_poses:
+                raise ConfigError(f"{path}: '{where}' names {shown(name)}, which is not a frame of the scene {self.name} (its frames: {', '.join(self.frame_poses) or 'none'})")
+            if isinstance(value, list) and 2 <= len(value) <= 4:
+                placement[name] = pose_from_values(list(vector(value, len(value), path, f"{where}.{name}")), self.frame_poses[name])
+            elif isinstance(value, dict):
+                placement[name] = parse_pose(value, path, f"{where}.{name}")
+            else:
+                raise ConfigError(f"{path}: '{where}.{name}' must be [x, y], [x, y, z], [x, y, z, yaw] or {{position: [x, y, z], yaw: RAD}} (got {shown(value)})")
+        self.place(placement, f"{path}: '{where}'")  # checks the areas
+        return placement
 
     def place(self, placements: Mapping[str, Pose], source: str = "--place") -> "Scene":
         """A copy with frames moved to `placements` (name -> pose), their objects with them.
