@@ -60,6 +60,7 @@ def _print_warning(message, category, filename, lineno, file=None, line=None) ->
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 SIGNAL_SUFFIXES = (".csv",)
 INTERRUPTED = 130  # what a shell reports for a process that SIGINT ended
+PLACE_HELP = "Place an object frame of the scene: NAME=x,y[,z[,yaw]] (metres, yaw in radians; z and yaw default to the scene's). Repeat for several frames."
 COMMAND_HELP = "With --backend command: the executor to run, with {reference} and {signals} for the two CSV paths (no shell)."
 COMMAND_TIMEOUT_HELP = "Seconds after which the executor is stopped and the trial fails (default: the task's, or 600)."
 
@@ -218,7 +219,7 @@ def retrieve(
 
     \b
         stlopt retrieve three_regions.npz --rate 240 -o reference.csv
-        stlopt retrieve insert.npz --frame shaft=0.45,-0.25,0.08 --frame holder=0.6,0.2,0.04,0.3
+        stlopt retrieve in.npz --frame shaft=.45,-.25,.08 --frame holder=.6,.2,.04
     """
     from stl_lfd.files import check_output_file
     from stl_lfd.hsmm import frame_poses, load_model
@@ -244,46 +245,49 @@ def retrieve(
 
 @app.command(cls=_PlainUsage)
 def rollout(
-    model_file: Path = typer.Argument(..., metavar="MODEL_FILE", help="Model file written by 'stlopt learn'."),
-    scene: str = typer.Option("free_space", help="Built-in scene name or a scene .yaml file."),
+    model_file: Path = typer.Argument(..., metavar="SKILL_FILE", help="Model file written by 'stlopt learn', or a behaviour file (.yaml)."),
+    scene: Optional[str] = typer.Option(None, help="Built-in scene name or a scene .yaml file (default: the behaviour's, or free_space)."),
     backend: BackendOption = typer.Option(
         BackendOption.pybullet, help="pybullet simulates a Panda; kinematic records the reference itself; command runs --command."
     ),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="Signal CSV to write (default: stdout)."),
-    duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to execute (default: the model's expected duration)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to execute (default: the skill's expected duration)."),
     rate: float = typer.Option(100.0, "--rate", help="Recording rate in samples per second."),
     command: Optional[str] = typer.Option(None, "--command", help=COMMAND_HELP),
     command_timeout: Optional[float] = typer.Option(None, "--command-timeout", help=COMMAND_TIMEOUT_HELP),
+    place: list[str] = typer.Option([], "--place", help=PLACE_HELP),
 ) -> None:
-    """Execute a skill model once and write the recorded signals (t,x,y,z,gripper,force).
+    """Execute a skill model or a behaviour once and write the recorded signals
+    (t,x,y,z,gripper,force, and NAME_x,NAME_y,NAME_z for each object frame of the scene).
 
-    Example:
+    Examples:
 
     \b
         stlopt rollout three_regions.npz | stlopt robustness specs/phi1.stl -
+        stlopt rollout configs/behaviours/pick_insert.yaml --place holder=.6,.25
     """
     import time
 
     from stl_lfd.files import check_output_file
-    from stl_lfd.hsmm import load_model
     from stl_lfd.signals import write_signal_csv
-    from stl_lfd.sim import load_scene
-    from stl_lfd.skill.execution import rollout_model
+    from stl_lfd.sim import execute, load_scene
+    from stl_lfd.skill import load_skill, reference_for
 
     with user_errors():
         _check_duration_and_rate(duration, rate)
         if output is not None:
             check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
         runner = _backend(backend.value, _command(command, command_timeout, None))
-        model = load_model(model_file)
-        world = load_scene(scene)
+        models, behaviour = load_skill(model_file)
+        world = load_scene(scene or (behaviour.scene if behaviour is not None else "free_space"))
+        world = world.place(world.placement_from_options(place))
+        reference = reference_for(models, behaviour, world.gripper_opening, duration, world.frame_poses)
         start = time.perf_counter()
-        simulated = duration if duration is not None else model.expected_duration()
-        if backend is BackendOption.pybullet and simulated > LONG_ROLLOUT_SECONDS:
-            with _progress_bar(f"simulating {simulated:.0f} s", int(simulated)) as advance:
-                result = rollout_model(model, world, runner, duration, rate, _whole_seconds(advance))
+        if backend is BackendOption.pybullet and reference.duration > LONG_ROLLOUT_SECONDS:
+            with _progress_bar(f"simulating {reference.duration:.0f} s", int(reference.duration)) as advance:
+                result = execute(reference, world, runner, rate, _whole_seconds(advance))
         else:
-            result = rollout_model(model, world, runner, duration, rate)
+            result = execute(reference, world, runner, rate)
         elapsed = time.perf_counter() - start
         write_signal_csv(result.signals, output if output is not None else sys.stdout)
     simulated = result.signals.duration
@@ -312,6 +316,18 @@ def _command(text: Optional[str], timeout: Optional[float], task_command):
     if not timeout > 0:
         raise ConfigError(f"--command-timeout must be positive (got {timeout:g})")
     return dataclasses.replace(task_command, timeout=float(timeout))
+
+
+def _placements(scene_name: str, place: list[str]):
+    """The one placement of --place options (None without any), checked against the scene."""
+    if not place:
+        return None
+    from stl_lfd.sim import load_scene
+
+    scene = load_scene(scene_name)
+    placement = scene.placement_from_options(place)
+    scene.place(placement)
+    return (placement,)
 
 
 def _backend(name: str, command):
@@ -345,7 +361,7 @@ def _check_duration_and_rate(duration: Optional[float], rate: float) -> None:
 
 @app.command(cls=_PlainUsage)
 def replay(
-    source: Path = typer.Argument(..., metavar="SOURCE", help="A model file, or a run directory written by 'stlopt optimize'."),
+    source: Path = typer.Argument(..., metavar="SOURCE", help="A model file, a behaviour file, or a run directory written by 'stlopt optimize'."),
     trial: str = typer.Option("best", "--trial", help="For a run directory: 'best', 'initial' (the unoptimised skill) or a trial number."),
     gui: bool = typer.Option(False, "--gui", help="Show the PyBullet GUI in real time (needs a display)."),
     video: Optional[Path] = typer.Option(None, "--video", help="Record a video (.mp4 or .gif) headless."),
@@ -353,6 +369,7 @@ def replay(
     scene: Optional[str] = typer.Option(None, help="Scene (default: the run's, or free_space)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to execute (default: the run's, or the model's expected duration)."),
     semantics: Optional[SemanticsOption] = typer.Option(None, help="Semantics of the printed robustness (default: the run's, or new)."),
+    place: list[str] = typer.Option([], "--place", help=PLACE_HELP + " Default: the run's (first) placement."),
 ) -> None:
     """Execute a skill again in PyBullet and show it (GUI) or film it (video).
 
@@ -370,7 +387,7 @@ def replay(
     from stl_lfd.report.replay import ReplayRequest, replay_skill
 
     use_gui = gui or (video is None and bool(os.environ.get("DISPLAY")))
-    request = ReplayRequest(source, trial, spec, scene, duration, semantics.value if semantics else None)
+    request = ReplayRequest(source, trial, spec, scene, duration, semantics.value if semantics else None, tuple(place))
     with user_errors():
         if gui and not os.environ.get("DISPLAY"):
             raise ExecutionError("--gui needs a display and DISPLAY is not set; record a video with --video FILE.mp4 instead")
@@ -398,6 +415,7 @@ def optimize(
     command: Optional[str] = typer.Option(None, "--command", help=COMMAND_HELP),
     command_timeout: Optional[float] = typer.Option(None, "--command-timeout", help=COMMAND_TIMEOUT_HELP),
     workers: Optional[int] = typer.Option(None, "--workers", help="Trials run at once, each batch proposed together (default: the task's, or 1)."),
+    place: list[str] = typer.Option([], "--place", help=PLACE_HELP + " Replaces the task's placements."),
 ) -> None:
     """Optimise a skill so that its execution satisfies the task's STL specification.
 
@@ -423,6 +441,7 @@ def optimize(
     with user_errors():
         file_task = load_task(task_file)
         given["command"] = _command(command, command_timeout, file_task.command)
+        given["placements"] = _placements(file_task.scene, place)
         run_dir = out or Path("runs") / file_task.name
         if resume:
             prepared = resume_run(run_dir, iterations, file_task, given)

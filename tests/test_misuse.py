@@ -312,7 +312,7 @@ CASES = [
     Case("replay-trial-beyond", ["replay", "{run}", "--trial", "99", "--video", "{case}/v.mp4"], 9, "no trial 99"),
     Case("replay-trial-word", ["replay", "{run}", "--trial", "last", "--video", "{case}/v.mp4"], 5, "--trial must be 'best', 'initial' or a trial number"),
     Case("replay-trial-on-model", ["replay", "{model}", "--trial", "3", "--video", "{case}/v.mp4"], 7, "--trial applies to run directories"),
-    Case("replay-missing-source", ["replay", "{case}/nope", "--video", "{case}/v.mp4"], 5, "no such model file or run directory"),
+    Case("replay-missing-source", ["replay", "{case}/nope", "--video", "{case}/v.mp4"], 5, "no such model file, behaviour file or run directory"),
     Case("replay-video-suffix", ["replay", "{model}", "--video", "{case}/v.avi"], 8, "must end in .mp4 or .gif"),
     Case("replay-video-folder", ["replay", "{model}", "--video", "{case}"], 8, "is a folder"),
     Case("replay-video-missing-folder", ["replay", "{model}", "--video", "{case}/no/v.mp4"], 8, "does not exist"),

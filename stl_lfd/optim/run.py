@@ -148,7 +148,10 @@ def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = N
     recorded = set(scene.recorded_signals)
     unknown = sorted(parts.signals - recorded)
     if unknown:
-        raise SpecError(f"signal {', '.join(unknown)} is not recorded by rollouts in the scene {scene.name} (they record {', '.join(scene.recorded_signals)})", str(task.spec))
+        raise SpecError(
+            f"signal {', '.join(unknown)} is not recorded by rollouts in the scene {scene.name} (they record {', '.join(scene.recorded_signals)})",
+            str(task.spec),
+        )
     if len(task.placements) > 1 and task.backend == "command":
         raise ConfigError(f"{task.source}: several placements need a simulated backend (the command backend executes one reference per trial)")
     behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None

@@ -46,6 +46,7 @@ from stl_lfd.optim.loop import Trial, best_trial
 from stl_lfd.optim.space import build_search_space
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import SINGLE_SKILL, Task, load_task
+from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable, write_signal_csv
 
 TASK_FILE = "task.yaml"
@@ -416,6 +417,7 @@ class TrialSkill:
     duration: float
     semantics: str
     nu: float
+    placements: tuple[dict[str, Pose], ...] = ()
 
 
 def trial_skill(path: Path, which: str = "best") -> TrialSkill:
@@ -434,7 +436,7 @@ def trial_skill(path: Path, which: str = "best") -> TrialSkill:
     if number > 0:
         found = [trial for trial in trials if trial.trial == number]
         models = build_search_space(models, task.parameters, task.source).apply(models, found[0].x)
-    return TrialSkill(number, models, task.behaviour, task.spec, task.scene, task.duration, task.semantics, task.nu)
+    return TrialSkill(number, models, task.behaviour, task.spec, task.scene, task.duration, task.semantics, task.nu, task.placements)
 
 
 def _trial_number(which: str, finished: int, path: Path) -> int:

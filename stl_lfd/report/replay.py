@@ -1,7 +1,8 @@
 """`stlopt replay`: execute a skill again in PyBullet, in the GUI or into a video.
 
-The skill comes from a model file, or from a trial of a run directory (which also names the
-spec, scene, duration and semantics of the run).
+The skill comes from a model file, a behaviour file, or a trial of a run directory (which
+also names the spec, scene, duration, semantics and object placements of the run; a run with
+several placements is replayed at its first, or at the one given with `--place`).
 """
 
 from __future__ import annotations
@@ -13,9 +14,10 @@ from typing import Callable
 
 from stl_lfd.errors import ConfigError, ExecutionError
 from stl_lfd.files import atomic_output, check_output_file
-from stl_lfd.hsmm import HSMM, load_model
+from stl_lfd.hsmm import HSMM
+from stl_lfd.poses import Pose
 from stl_lfd.sim import DEFAULT_RATE, execute
-from stl_lfd.skill.behaviour import load_behaviour, reference_for
+from stl_lfd.skill.behaviour import load_behaviour, load_skill, reference_for
 from stl_lfd.skill.execution import scene_with_spec_regions
 from stl_lfd.stl.evaluate import evaluate_table
 
@@ -32,6 +34,7 @@ class ReplayRequest:
     scene: str | None = None
     duration: float | None = None
     semantics: str | None = None
+    place: tuple[str, ...] = ()  # NAME=x,y[,z[,yaw]] texts for the scene's object frames
 
 
 @dataclass(frozen=True)
@@ -47,6 +50,7 @@ class Skill:
     semantics: str
     nu: float
     default_video: Path
+    placements: tuple[dict[str, Pose], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -66,6 +70,8 @@ def replay_skill(request: ReplayRequest, gui: bool, video: Path | None, progress
 
         video = check_output_file(video if video is not None else skill.default_video, VIDEO_SUFFIXES, "video")
     scene = scene_with_spec_regions(skill.scene, skill.spec)
+    placement = scene.placement_from_options(list(request.place)) if request.place else (skill.placements[0] if skill.placements else {})
+    scene = scene.place(placement)
     behaviour = load_behaviour(skill.behaviour) if skill.behaviour is not None else None
     reference = reference_for(skill.models, behaviour, scene.gripper_opening, skill.duration, scene.frame_poses)
     if gui:
@@ -115,16 +121,18 @@ def resolve_skill(request: ReplayRequest) -> Skill:
             semantics=request.semantics or run.semantics,
             nu=run.nu,
             default_video=source / f"replay-trial-{run.trial}.mp4",
+            placements=run.placements,
         )
     if not source.exists():
-        raise ConfigError(f"{source}: no such model file or run directory")
+        raise ConfigError(f"{source}: no such model file, behaviour file or run directory")
     if request.trial != "best":
-        raise ExecutionError("--trial applies to run directories, not to a model file")
+        raise ExecutionError("--trial applies to run directories, not to a model or behaviour file")
+    models, behaviour = load_skill(source)
     return Skill(
-        models={"skill": load_model(source)},
-        behaviour=None,
+        models=models,
+        behaviour=source if behaviour is not None else None,
         spec=request.spec,
-        scene=request.scene or "free_space",
+        scene=request.scene or (behaviour.scene if behaviour is not None else "free_space"),
         duration=request.duration,
         semantics=request.semantics or "new",
         nu=1.0,

@@ -161,13 +161,17 @@ class Scene:
         placement = {}
         for name, value in data.items():
             if name not in self.frame_poses:
-                raise ConfigError(f"{path}: '{where}' names {shown(name)}, which is not a frame of the scene {self.name} (its frames: {', '.join(self.frame_poses) or 'none'})")
+                raise ConfigError(
+                    f"{path}: '{where}' names {shown(name)}, which is not a frame of the scene {self.name} (its frames: {', '.join(self.frame_poses) or 'none'})"
+                )
             if isinstance(value, list) and 2 <= len(value) <= 4:
                 placement[name] = pose_from_values(list(vector(value, len(value), path, f"{where}.{name}")), self.frame_poses[name])
             elif isinstance(value, dict):
                 placement[name] = parse_pose(value, path, f"{where}.{name}")
             else:
-                raise ConfigError(f"{path}: '{where}.{name}' must be [x, y], [x, y, z], [x, y, z, yaw] or {{position: [x, y, z], yaw: RAD}} (got {shown(value)})")
+                raise ConfigError(
+                    f"{path}: '{where}.{name}' must be [x, y], [x, y, z], [x, y, z, yaw] or {{position: [x, y, z], yaw: RAD}} (got {shown(value)})"
+                )
         self.place(placement, f"{path}: '{where}'")  # checks the areas
         return placement
 

@@ -186,3 +186,12 @@ def reference_for(
     if len(models) != 1:
         raise ConfigError(f"several skills ({', '.join(models)}) but no behaviour to sequence them")
     return reference_of(next(iter(models.values())), duration, poses=poses)
+
+
+def load_skill(path: str | Path) -> tuple[dict[str, HSMM], Behaviour | None]:
+    """The skills of a model file (one skill, named `skill`) or of a behaviour file (.yaml)."""
+    path = Path(path)
+    if path.suffix in (".yaml", ".yml"):
+        behaviour = load_behaviour(path)
+        return behaviour_models(behaviour), behaviour
+    return {"skill": load_model(path)}, None

@@ -41,7 +41,7 @@ def test_rollout_to_a_file(learned_model_file, tmp_path):
         (["rollout", "{model}", "--scene", "kitchen"], 5, "unknown scene 'kitchen'"),
         (["rollout", "{model}", "--rate", "0"], 6, "the rate must be a positive number"),
         (["rollout", "{model}", "--backend", "mujoco"], 2, "mujoco"),
-        (["replay", "missing.npz", "--video", "x.gif"], 5, "no such model file or run directory"),
+        (["replay", "missing.npz", "--video", "x.gif"], 5, "no such model file, behaviour file or run directory"),
         (["replay", "{model}", "--video", "x.avi"], 8, "must end in .mp4 or .gif"),
     ],
 )
