@@ -56,3 +56,35 @@ def test_bad_scene_files_name_the_file_and_key(tmp_path, text, message):
     with pytest.raises(ConfigError, match=message) as error:
         load_scene(path)
     assert str(path) in str(error.value)
+
+
+def test_placing_a_frame_moves_its_objects_rigidly():
+    import numpy as np
+
+    from stl_lfd.poses import Pose
+
+    scene = load_scene("pick_insert")
+    holder = scene.frame_poses["holder"]
+    placed = scene.place({"holder": Pose((0.6, 0.1, 0.04), 0.5)})
+    before = {item.name: item for item in scene.objects}
+    for item in placed.objects:
+        if item.name.startswith("holder_"):
+            local = holder.from_base(np.array([before[item.name].position]))
+            assert np.allclose(item.position, Pose((0.6, 0.1, 0.04), 0.5).to_base(local)[0])
+            assert item.orientation[2] == pytest.approx(before[item.name].orientation[2] + 0.5)
+        else:
+            assert item == before[item.name]
+    assert placed.frame_poses["holder"] == Pose((0.6, 0.1, 0.04), 0.5)
+    assert placed.recorded_signals[-6:] == ("shaft_x", "shaft_y", "shaft_z", "holder_x", "holder_y", "holder_z")
+
+
+def test_placements_outside_the_table_or_of_unknown_frames_are_refused():
+    scene = load_scene("pick_insert")
+    with pytest.raises(ConfigError, match=r"--place: holder at \(0.9, 0.2\) is outside the area it may be placed in \(x 0.3 to 0.7"):
+        scene.place(scene.placement_from_options(["holder=0.9,0.2"]))
+    with pytest.raises(ConfigError, match=r"--place cup=0.5,0.2: no frame 'cup' \(frames: shaft, holder\)"):
+        scene.placement_from_options(["cup=0.5,0.2"])
+    with pytest.raises(ConfigError, match="holder is placed twice"):
+        scene.placement_from_options(["holder=0.5,0.2", "holder=0.5,0.25"])
+    placement = scene.placement_from_options(["shaft=0.4,-0.3"])
+    assert placement["shaft"].position == (0.4, -0.3, 0.08) and placement["shaft"].yaw == 0.0

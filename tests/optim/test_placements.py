@@ -1,0 +1,92 @@
+"""Optimising object-centric skills: means in a frame, object placements, the worst over them."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from stl_lfd.errors import ConfigError
+from stl_lfd.hsmm import learn_from_folder, save_model
+from stl_lfd.optim import load_task, optimise, start_run
+from tests.conftest import ROOT
+
+BEHAVIOUR = ROOT / "configs" / "behaviours" / "pick_insert.yaml"
+PLACEMENTS = """placements:
+  - {shaft: [0.42, -0.22], holder: {position: [0.52, 0.24, 0.04], yaw: 0.3}}
+  - {shaft: [0.48, -0.28], holder: [0.60, 0.16, 0.04, -0.3]}
+"""
+
+
+def phi1_task(tmp_path: Path, model: Path, frame: str = "") -> Path:
+    path = tmp_path / f"phi1-{model.stem}.yaml"
+    path.write_text(
+        f"spec: {ROOT / 'specs' / 'phi1.stl'}\nmodel: {model}\nbackend: kinematic\nduration: 22\nrate: 50\n"
+        f"parameters:\n  means: {{components: [2, 3]{frame}}}\n  durations: {{components: all}}\n"
+        "optimizer: {initial: 3, trials: 5, seed: 4}\n"
+    )
+    return path
+
+
+def test_a_model_with_the_base_frame_alone_gives_the_same_trials_as_the_plain_model(tmp_path):
+    folder = ROOT / "demos" / "three_regions"
+    save_model(learn_from_folder(folder, 6)[0], tmp_path / "plain.npz")
+    save_model(learn_from_folder(folder, 6, frames=["base"])[0], tmp_path / "framed.npz")
+    runs = []
+    for model, frame in (("plain", ""), ("framed", ", frame: base")):
+        optimise(start_run(load_task(phi1_task(tmp_path, tmp_path / f"{model}.npz", frame)), tmp_path / model))
+        runs.append([json.loads(line) for line in (tmp_path / model / "trials.jsonl").read_text().splitlines()])
+    plain, framed = runs
+    assert [trial["robustness"] for trial in plain] == [trial["robustness"] for trial in framed]
+    assert [list(trial["parameters"].values()) for trial in plain] == [list(trial["parameters"].values()) for trial in framed]
+    assert list(framed[0]["parameters"])[0] == "mean[2].base.x"
+
+
+def placed_task(tmp_path: Path, extra: str = PLACEMENTS, means: str = "{components: [5, 6], together: true, frame: holder, coordinates: [x, y]}") -> Path:
+    path = tmp_path / "placed.yaml"
+    path.write_text(
+        f"spec: {ROOT / 'specs' / 'phi3_strict_objects.stl'}\nbehaviour: {BEHAVIOUR}\nbackend: kinematic\nduration: 48\nrate: 20\n"
+        f"parameters:\n  insert:\n    means: {means}\n"
+        "optimizer: {initial: 2, trials: 3, seed: 1}\n" + extra
+    )
+    return path
+
+
+def test_several_placements_score_the_worst_and_record_each(tmp_path):
+    task = load_task(placed_task(tmp_path))
+    assert len(task.placements) == 2 and task.placements[1]["holder"].yaw == -0.3
+    prepared = start_run(task, tmp_path / "run")
+    objective = prepared.objective
+    assert len(objective.scenes) == 2 and objective.scenes[1].frame_poses["shaft"].position == (0.48, -0.28, 0.08)
+    references = [objective.reference(prepared.models, scene) for scene in objective.scenes]
+    assert np.abs(references[0].positions[-1] - references[1].positions[-1]).max() > 0.05  # the skill follows the holder
+    optimise(prepared)
+    trials = [json.loads(line) for line in (tmp_path / "run" / "trials.jsonl").read_text().splitlines()]
+    for trial in trials:
+        values = list(trial["components"].values())
+        assert [name.split(" (")[0] for name in trial["components"]] == ["placement 1", "placement 2"]
+        assert trial["robustness"] == min(values)
+    assert "insert.mean[5+6].holder.x" in trials[0]["parameters"]
+    recorded = (tmp_path / "run" / "task.yaml").read_text()
+    assert "placements:" in recorded and "frame: holder" in recorded
+
+
+@pytest.mark.parametrize(
+    ("extra", "means", "message"),
+    [
+        ("place: {cup: [0.5, 0.2]}\n", None, "'place' names 'cup', which is not a frame of the scene pick_insert"),
+        ("place: {holder: [0.9, 0.2]}\n", None, r"'place': holder at \(0.9, 0.2\) is outside the area"),
+        ("place: {holder: [0.5]}\n", None, r"'place.holder' must be \[x, y\]"),
+        ("place: {holder: [0.5, 0.2]}\n" + PLACEMENTS, None, r"give 'place' \(one placement\) or 'placements' \(several\), not both"),
+        ("", "{components: [6], coordinates: [x]}", r"the model has frames \(base, shaft, holder\): say in which one the mean moves \('frame:'\)"),
+        ("", "{components: [6], frame: cup}", r"the model has no frame cup \(its frames: base, shaft, holder\)"),
+    ],
+)
+def test_bad_placements_and_frames_name_the_file_and_key(tmp_path, extra, means, message):
+    from stl_lfd.optim.run import objective_for, task_models
+
+    path = placed_task(tmp_path, extra, means) if means else placed_task(tmp_path, extra)
+    with pytest.raises(ConfigError) as error:
+        task = load_task(path)
+        objective_for(task, task_models(task), execute=False)
+    assert str(path) in str(error.value) and __import__("re").search(message, str(error.value)), str(error.value)
