@@ -1,7 +1,9 @@
 """Model files: one self-describing `.npz` holding every learned attribute of an `HSMM`.
 
-Version 2 added `frame_names` for task-parameterised models (`TPHSMM`); files without it (all
-version 1 files) hold a single-frame `HSMM`.
+Version 2 added `frame_names` for task-parameterised models (`TPHSMM`; files without it, all
+version 1 files among them, hold a single-frame `HSMM`) and the demonstrations' end point
+(`end_state`, `end_offsets`, `end_covars`; models from files without it retrieve as before,
+ending at the final state's mean).
 """
 
 from __future__ import annotations
@@ -25,6 +27,9 @@ def save_model(model: HSMM, path: str | Path) -> None:
     """Write `model` to `path` (.npz), atomically (see `stl_lfd.files`)."""
     model._check()
     frames = {"frame_names": np.array(model.frame_names_)} if isinstance(model, TPHSMM) else {}
+    end = model.end_target()
+    if end is not None:
+        frames.update(end_state=end[0], end_offsets=np.asarray(model.end_offsets_), end_covars=end[2])
     with atomic_output(path) as temporary:
         np.savez(
             temporary,
@@ -70,6 +75,10 @@ def load_model(path: str | Path) -> HSMM:
         setattr(model, name, np.array(fields[name.rstrip("_")], dtype=float))
     model.sample_period_ = float(fields["sample_period"])
     model.signal_names_ = [str(name) for name in fields["signal_names"]]
+    if "end_offsets" in fields:
+        model.end_state_ = int(fields["end_state"])
+        model.end_offsets_ = np.array(fields["end_offsets"], dtype=float)
+        model.end_covars_ = np.array(fields["end_covars"], dtype=float)
     try:
         model._check()
     except ModelError as error:

@@ -55,6 +55,12 @@ class HSMM:
         startprob_: `K` initial distribution.
         sample_period_: seconds between samples of the data the model was fitted on.
         signal_names_: the D signal names.
+        end_state_, end_offsets_, end_covars_: where the demonstrations end: the final state
+            of the nominal path, the `D` offset of the mean end point from that state's mean,
+            and the `D x D` covariance of the end points. Retrieval tracks this end for the
+            second half of the final state, so that the skill finishes where the
+            demonstrations do rather than at the final state's mean (the average of a segment
+            that may still be moving). None in models from older files.
     """
 
     def __init__(self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-2, reg_covar: float = 1e-6) -> None:
@@ -98,6 +104,7 @@ class HSMM:
                 break
         self._set_transitions(transmat)
         self._fit_durations(gamma, lengths)
+        self._fit_end(np.array([sequence[-1] for sequence in sequences]))
         self._check()
         return self
 
@@ -213,6 +220,11 @@ class HSMM:
             raise ModelError(f"duration means and stds must be positive (got means {np.round(self.duration_means_, 3)})")
         if len(self.feature_names) != D:
             raise ModelError(f"the {D} columns of means_ do not match the signals {', '.join(self.feature_names)}")
+        end = self.end_target()
+        if end is not None and not (0 <= end[0] < K and np.shape(self.end_offsets_) == (D,) and np.shape(end[2]) == (D, D)):
+            raise ModelError(f"end_state_, end_offsets_ and end_covars_ must be a state, ({D},) and ({D}, {D})")
+        if end is not None and not (np.all(np.isfinite(end[1])) and np.all(np.isfinite(end[2]))):
+            raise ModelError("the end point contains NaN or infinity")
         if not np.isclose(np.sum(self.startprob_), 1.0):
             raise ModelError(f"startprob_ must sum to 1 (got {np.sum(self.startprob_):.6g})")
 
@@ -314,6 +326,23 @@ class HSMM:
                 logger.warning("state %d is never the most likely one in the demonstrations", k)
         self.duration_means_ = means * self.sample_period_
         self.duration_stds_ = stds * self.sample_period_
+
+    def _fit_end(self, ends: np.ndarray) -> None:
+        """The Gaussian of the demonstrations' end points (`B x D`), attached to the final
+        state of the nominal path as an offset from its mean, so that moving that state's
+        mean moves the end with it."""
+        self.end_state_ = self.nominal_path()[-1]
+        self.end_offsets_ = ends.mean(axis=0) - self.means_[self.end_state_]
+        spread = np.atleast_2d(np.cov(ends.T, bias=True)) if len(ends) > 1 else np.zeros((ends.shape[1],) * 2)
+        self.end_covars_ = self._constrained(spread) + self.reg_covar * np.eye(ends.shape[1])
+
+    def end_target(self) -> tuple[int, np.ndarray, np.ndarray] | None:
+        """(final state, `D` end mean, `D x D` end covariance), or None for a model without
+        one (files written before end points were learned)."""
+        if getattr(self, "end_offsets_", None) is None:
+            return None
+        state = int(self.end_state_)
+        return state, np.asarray(self.means_)[state] + self.end_offsets_, np.asarray(self.end_covars_)
 
     def _hmm_transmat(self) -> np.ndarray:
         """Equivalent HMM transition matrix: self-transition 1 - 1/duration mean (steps)."""

@@ -74,19 +74,34 @@ def retrieve(
     states = model.state_sequence(steps)
     dimension = model.n_features
     A, B = lqt.double_integrator(dimension, dt)
-    precisions = np.zeros((model.n_states, 2 * dimension, 2 * dimension))
-    precisions[:, :dimension, :dimension] = np.linalg.inv(model.covars_)
-    targets = np.zeros((model.n_states, 2 * dimension))
-    targets[:, :dimension] = model.means_
-    scale = float(np.mean([np.trace(p) / dimension for p in precisions[:, :dimension, :dimension]]))
+    means, covars, segments = _tracked(model, states)
+    precisions = np.zeros((len(means), 2 * dimension, 2 * dimension))
+    precisions[:, :dimension, :dimension] = np.linalg.inv(covars)
+    targets = np.zeros((len(means), 2 * dimension))
+    targets[:, :dimension] = means
+    scale = float(np.mean([np.trace(p) / dimension for p in precisions[: model.n_states, :dimension, :dimension]]))
     R = control_cost * scale * np.eye(dimension)
     x0 = targets[states[0]].copy()
-    trajectory, _ = lqt.solve(A, B, precisions, R, targets, x0, segment_ids=states)
+    trajectory, _ = lqt.solve(A, B, precisions, R, targets, x0, segment_ids=segments)
     times = np.arange(steps) * dt
     positions, velocities = trajectory[:, :dimension], trajectory[:, dimension:]
     if rate is not None and not np.isclose(rate * dt, 1.0):
         return _resample(times, positions, velocities, states, rate, duration, model.signal_names_)
     return Trajectory(times, positions, velocities, states, list(model.signal_names_))
+
+
+def _tracked(model: HSMM, states: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The Gaussians the tracker follows (`S x D` means, `S x D x D` covariances) and the row
+    followed at each step: the states' own, and in the second half of the final state (from
+    half its duration mean on), the demonstrations' end point when the model knows it."""
+    end = model.end_target()
+    if end is None or states[-1] != end[0]:
+        return np.asarray(model.means_), np.asarray(model.covars_), states
+    final_run = len(states) - int(np.argmax(states[::-1] != end[0])) if np.any(states != end[0]) else 0
+    switch = final_run + max(1, int(round(model.duration_means_[end[0]] / model.sample_period_ / 2)))
+    segments = states.copy()
+    segments[switch:] = model.n_states
+    return np.vstack([model.means_, end[1]]), np.concatenate([model.covars_, end[2][None]]), segments
 
 
 def _resample(

@@ -75,14 +75,23 @@ class TPHSMM(HSMM):
         if missing:
             raise ModelError(f"no pose for frame {', '.join(missing)} (the model's frames: {', '.join(self.frame_names_)})")
         D, names = len(self.signal_names_), self.signal_names_
+        end = self.end_target()
+        # The end point's Gaussian travels with the states' as one more row.
+        local_means = self.means_ if end is None else np.vstack([self.means_, end[1]])
+        local_covars = self.covars_ if end is None else np.concatenate([self.covars_, end[2][None]])
         means, covars = [], []
         for index, frame in enumerate(self.frame_names_):
             rotation, offset = _transform(_pose(poses, frame), names)
             block = slice(index * D, (index + 1) * D)
-            means.append(self.means_[:, block] @ rotation.T + offset)
-            covars.append(rotation @ self.covars_[:, block, block] @ rotation.T)
+            means.append(local_means[:, block] @ rotation.T + offset)
+            covars.append(rotation @ local_covars[:, block, block] @ rotation.T)
+        base_means, base_covars = _product(means, covars)
         model = HSMM(self.n_states, self.n_iter, self.tol, self.reg_covar)
-        model.means_, model.covars_ = _product(means, covars)
+        model.means_, model.covars_ = base_means[: self.n_states], base_covars[: self.n_states]
+        if end is not None:
+            model.end_state_ = end[0]
+            model.end_offsets_ = base_means[-1] - base_means[end[0]]
+            model.end_covars_ = base_covars[-1]
         for name in ("duration_means_", "duration_stds_", "transmat_", "startprob_"):
             setattr(model, name, np.array(getattr(self, name), dtype=float))
         model.sample_period_, model.signal_names_ = self.sample_period_, list(names)
