@@ -1,15 +1,17 @@
 """`make bench`: run every benchmark and print its table."""
 
-from benchmarks import bench_cli, bench_command, bench_hsmm, bench_optim, bench_sim, bench_stl
+from benchmarks import bench_cli, bench_command, bench_endpoint, bench_hsmm, bench_optim, bench_placements, bench_sim, bench_stl
 
 
 def main() -> None:
     bench_cli.main()
     bench_stl.main()
     bench_hsmm.main()
+    bench_endpoint.main()
     bench_sim.main()
     bench_command.main([])
     bench_optim.main([])
+    bench_placements.main([])
 
 
 if __name__ == "__main__":

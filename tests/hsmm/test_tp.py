@@ -126,3 +126,28 @@ def test_sidecar_problems_are_one_clear_error(tmp_path):
         learn_from_folder(PICK, 4, frames=["shaft", "holder"])
     with pytest.raises(ModelError, match="no demonstration has a frame sidecar"):
         learn_from_folder(ROOT / "demos" / "three_regions", 4, frames=["shaft"])
+
+
+def test_retrieval_ends_where_the_demonstrations_end_and_the_end_moves_with_the_final_state(learned_model):
+    from stl_lfd.hsmm.demos import resample
+
+    demos = load_demos(ROOT / "demos" / "three_regions")
+    sequences = [resample(demo, learned_model.sample_period_) for demo in demos]
+    mean_end = np.mean([sequence[-1] for sequence in sequences], axis=0)
+    extent = np.ptp(np.concatenate(sequences), axis=0).max()
+    end = retrieve(learned_model).positions[-1]
+    assert np.linalg.norm(end - mean_end) < 0.02 * extent
+    assert np.linalg.norm(learned_model.means_[-1] - mean_end) > 0.1 * extent  # the final state's mean is not the end
+    moved = __import__("copy").deepcopy(learned_model)
+    moved.means_ = moved.means_.copy()
+    moved.means_[learned_model.end_state_] += [0.03, -0.02, 0.0]
+    assert np.allclose(retrieve(moved).positions[-1], end + [0.03, -0.02, 0.0], atol=1e-3)
+
+
+def test_models_without_an_end_point_retrieve_as_before(learned_model):
+    import copy
+
+    old = copy.deepcopy(learned_model)
+    old.end_offsets_ = None
+    trajectory = retrieve(old)
+    assert np.linalg.norm(trajectory.positions[-1] - learned_model.means_[-1]) < 0.01
