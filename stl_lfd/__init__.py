@@ -4,8 +4,9 @@ The public API, loaded on first use (so `import stl_lfd` loads neither torch nor
 
 - STL: `Spec` (`Spec.parse`, `Spec.load`, `.robustness`, `.trace`, `.components`), `compile_spec`;
 - signals: `SignalTable`, `read_signal_csv`, `write_signal_csv`;
-- skills: `HSMM` (`fit`, `predict`, `sample`), `learn`, `learn_from_folder`, `load_model`, `save_model`,
-  `retrieve`; `load_scene`, `execute`, `rollout_model`; `Command` (an external executor, for
+- skills: `HSMM` (`fit`, `predict`, `sample`), `TPHSMM` (`at(poses)`), `Pose`, `learn`,
+  `learn_from_folder`, `load_model`, `save_model`, `retrieve`; `load_scene`, `execute`,
+  `rollout_model`; `Command` (an external executor, for
   `backend="command"`), `read_reference_csv`;
 - optimisation: `optimize` -> `Result`, with `Parameters`, `MeanParameters`,
   `DurationParameters` and `Optimizer`; `load_task` for task files.
@@ -24,6 +25,8 @@ _HOMES = {
     "read_signal_csv": "stl_lfd.signals",
     "write_signal_csv": "stl_lfd.signals",
     "HSMM": "stl_lfd.hsmm",
+    "TPHSMM": "stl_lfd.hsmm",
+    "Pose": "stl_lfd.poses",
     "learn": "stl_lfd.hsmm",
     "learn_from_folder": "stl_lfd.hsmm",
     "load_model": "stl_lfd.hsmm",

@@ -34,7 +34,7 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
         ("trajectories", "End-effector paths of all trials (x-y), the best in red", figures.trajectories(run)),
         ("region_distances", "Signed distance to each region of the spec within its time window", figures.region_distances(run)),
         ("robustness", "Robustness per trial and best so far", figures.robustness_per_trial(run)),
-        ("components", "Robustness of each part of the spec per trial (the lowest binds)", figures.component_robustness(run)),
+        ("components", "Robustness of each part of the spec, or at each object placement, per trial (the lowest binds)", figures.component_robustness(run)),
         ("gp_slices", "GP surrogate through the best point", figures.gp_slices(run, gp_parameters)),
         ("transitions", "Transition graph before and after optimisation", figures.transition_graphs(run)),
         ("durations", "Duration means per state per trial", figures.durations_per_trial(run)),

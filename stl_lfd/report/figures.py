@@ -8,7 +8,7 @@ from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrowPatch, Rectangle
 
-from stl_lfd.hsmm import HSMM, retrieve
+from stl_lfd.hsmm import HSMM
 from stl_lfd.report.run_data import RunData, signed_distance
 
 BEST = "tab:red"
@@ -226,7 +226,7 @@ def _transition_graph(axes, model: HSMM, title: str) -> None:
 
 def followed_states(model: HSMM) -> list[int]:
     """The states (0-based) the retrieval of `model` goes through, in order."""
-    states = retrieve(model, model.expected_duration() + 1.0).states
+    states = model.state_sequence(int(round((model.expected_duration() + 1.0) / model.sample_period_)) + 1)  # no tracking needed (nor frame poses)
     changes = np.flatnonzero(np.diff(states)) + 1
     return [int(states[0])] + [int(states[index]) for index in changes]
 

@@ -69,6 +69,13 @@ def test_several_placements_score_the_worst_and_record_each(tmp_path):
     assert "insert.mean[5+6].holder.x" in trials[0]["parameters"]
     recorded = (tmp_path / "run" / "task.yaml").read_text()
     assert "placements:" in recorded and "frame: holder" in recorded
+    from typer.testing import CliRunner
+
+    from stl_lfd.cli import app
+
+    report = CliRunner().invoke(app, ["report", str(tmp_path / "run"), "--out", str(tmp_path / "report")])
+    assert report.exit_code == 0, report.stderr
+    assert (tmp_path / "report" / "components.png").is_file() and (tmp_path / "report" / "transitions.png").is_file()
 
 
 @pytest.mark.parametrize(
