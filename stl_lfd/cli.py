@@ -269,18 +269,20 @@ def rollout(
     import time
 
     from stl_lfd.files import check_output_file
+    from stl_lfd.hsmm import load_model
     from stl_lfd.signals import write_signal_csv
     from stl_lfd.sim import execute, load_scene
-    from stl_lfd.skill import load_skill, reference_for
+    from stl_lfd.skill import behaviour_models, load_behaviour, reference_for
 
     with user_errors():
         _check_duration_and_rate(duration, rate)
         if output is not None:
             check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
         runner = _backend(backend.value, _command(command, command_timeout, None))
-        models, behaviour = load_skill(model_file)
+        behaviour = load_behaviour(model_file) if model_file.suffix in (".yaml", ".yml") else None
         world = load_scene(scene or (behaviour.scene if behaviour is not None else "free_space"))
         world = world.place(world.placement_from_options(place))
+        models = behaviour_models(behaviour) if behaviour is not None else {"skill": load_model(model_file)}
         reference = reference_for(models, behaviour, world.gripper_opening, duration, world.frame_poses)
         start = time.perf_counter()
         if backend is BackendOption.pybullet and reference.duration > LONG_ROLLOUT_SECONDS:
