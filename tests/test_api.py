@@ -29,7 +29,7 @@ def readme_python_blocks() -> list[str]:
 @pytest.mark.slow
 def test_the_readme_python_examples_run(monkeypatch, capsys):
     blocks = readme_python_blocks()
-    assert len(blocks) == 3
+    assert len(blocks) == 4
     monkeypatch.chdir(ROOT)
     namespace: dict = {}
     for block in blocks:
@@ -38,6 +38,9 @@ def test_the_readme_python_examples_run(monkeypatch, capsys):
     assert float(printed[1]) == pytest.approx(-0.31)
     assert namespace["result"].best_robustness >= namespace["result"].initial_robustness
     assert len(namespace["result"].history) == 6
+    assert namespace["insert"].frame_names_ == ["base", "shaft", "holder"]
+    end = namespace["holder"].from_base(namespace["moved"].positions[-1:])[0]
+    assert abs(end[0] - 0.008) < 0.004 and abs(end[1]) < 0.004  # the demonstrated stop, carried to the moved holder
 
 
 def test_import_stl_lfd_is_lazy():
