@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Mapping, Sequence
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM
@@ -24,6 +24,7 @@ from stl_lfd.optim.loop import Trial, best_trial
 from stl_lfd.optim.run import PreparedRun, optimise, prepare_objective
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import SINGLE_SKILL, Optimizer, Parameters, Task
+from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim import Command
 from stl_lfd.stl import Spec
@@ -112,6 +113,7 @@ def optimize(
     rate: float = 100.0,
     behaviour: str | Path | None = None,
     command: Command | None = None,
+    placements: Sequence[Mapping[str, Pose]] = (),
     on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None,
 ) -> Result:
     """Adapt `models` so that their execution satisfies `spec`, as robustly as possible.
@@ -125,6 +127,8 @@ def optimize(
         duration: seconds of each rollout (the spec's windows must fit in it).
         command: the executor of `backend="command"` (its exchange files go to a temporary
             folder per execution, removed afterwards).
+        placements: where the scene's object frames stand (frame name -> `Pose`); several
+            make every trial execute once per placement and score the worst.
         on_trial: called after each trial with it and the best trial so far.
 
     Returns:
@@ -140,6 +144,7 @@ def optimize(
         name="python", spec=Path(spec.source), model=None, demos=None, behaviour=Path(behaviour) if behaviour is not None else None, states=0,
         scene=scene, backend=backend, semantics=semantics, nu=nu, duration=float(duration), rate=float(rate),
         parameters=parameters, optimizer=optimizer or Optimizer(), source=Path("<python>"), command=command,
+        placements=tuple(dict(placement) for placement in placements),
     )  # fmt: skip
     space, objective, initial, summary = prepare_objective(task, models, spec.tree)
     record = MemoryRun(initial.payload)

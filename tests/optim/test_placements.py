@@ -97,3 +97,28 @@ def test_bad_placements_and_frames_name_the_file_and_key(tmp_path, extra, means,
         task = load_task(path)
         objective_for(task, task_models(task), execute=False)
     assert str(path) in str(error.value) and __import__("re").search(message, str(error.value)), str(error.value)
+
+
+def test_optimize_from_python_takes_placements():
+    from stl_lfd import MeanParameters, Optimizer, Parameters, Pose, optimize
+    from stl_lfd.skill import behaviour_models, load_behaviour
+
+    behaviour = load_behaviour(BEHAVIOUR)
+    models = behaviour_models(behaviour)
+    placements = [{"holder": Pose((0.52, 0.24, 0.04), 0.3)}, {"holder": Pose((0.6, 0.16, 0.04), -0.3)}]
+    result = optimize(
+        models,
+        ROOT / "specs" / "phi3_strict_objects.stl",
+        {"insert": Parameters(means=MeanParameters(components=(6,), coordinates=("x",), frame="holder"))},
+        Optimizer(initial=2, trials=2, seed=0),
+        duration=48,
+        rate=20,
+        scene="pick_insert",
+        backend="kinematic",
+        behaviour=BEHAVIOUR,
+        placements=placements,
+    )
+    assert len(result.history) == 2 and len(result.history[0].components) == 2
+    with pytest.raises(ConfigError, match="outside the area"):
+        optimize(models, ROOT / "specs" / "phi3_strict_objects.stl", {"insert": Parameters(means=MeanParameters(components=(6,), frame="holder"))},
+                 duration=48, rate=20, scene="pick_insert", backend="kinematic", behaviour=BEHAVIOUR, placements=[{"holder": Pose((0.9, 0.2, 0.04))}])  # fmt: skip
