@@ -28,6 +28,7 @@ def phi1_task(tmp_path: Path, model: Path, frame: str = "") -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_a_model_with_the_base_frame_alone_gives_the_same_trials_as_the_plain_model(tmp_path):
     folder = ROOT / "demos" / "three_regions"
     save_model(learn_from_folder(folder, 6)[0], tmp_path / "plain.npz")
@@ -52,6 +53,7 @@ def placed_task(tmp_path: Path, extra: str = PLACEMENTS, means: str = "{componen
     return path
 
 
+@pytest.mark.slow
 def test_several_placements_score_the_worst_and_record_each(tmp_path):
     task = load_task(placed_task(tmp_path))
     assert len(task.placements) == 2 and task.placements[1]["holder"].yaw == -0.3
@@ -99,6 +101,7 @@ def test_bad_placements_and_frames_name_the_file_and_key(tmp_path, extra, means,
     assert str(path) in str(error.value) and __import__("re").search(message, str(error.value)), str(error.value)
 
 
+@pytest.mark.slow
 def test_optimize_from_python_takes_placements():
     from stl_lfd import MeanParameters, Optimizer, Parameters, Pose, optimize
     from stl_lfd.skill import behaviour_models, load_behaviour
