@@ -135,6 +135,8 @@ def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = N
     `task.spec` when given; with a backend of its own unless not `execute`); spec problems are
     found here, before any trial: unknown signals, and windows that reach past the rollout
     duration."""
+    if len(task.placements) > 1 and task.backend == "command":
+        raise ConfigError(f"{task.source}: several placements need a simulated backend (the command backend executes one reference per trial)")
     space = build_search_space(models, task.parameters, task.source)
     spec = load_spec(task.spec) if spec is None else spec
     parts = split_spec(spec, task.semantics, task.nu, source=str(task.spec))
@@ -152,8 +154,6 @@ def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = N
             f"signal {', '.join(unknown)} is not recorded by rollouts in the scene {scene.name} (they record {', '.join(scene.recorded_signals)})",
             str(task.spec),
         )
-    if len(task.placements) > 1 and task.backend == "command":
-        raise ConfigError(f"{task.source}: several placements need a simulated backend (the command backend executes one reference per trial)")
     behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None
     backend = new_backend(task.backend, task.command) if execute else None
     return space, SkillObjective(models, space, task, behaviour, scene, parts, backend)

@@ -125,3 +125,17 @@ def test_optimize_from_python_takes_placements():
     with pytest.raises(ConfigError, match="outside the area"):
         optimize(models, ROOT / "specs" / "phi3_strict_objects.stl", {"insert": Parameters(means=MeanParameters(components=(6,), frame="holder"))},
                  duration=48, rate=20, scene="pick_insert", backend="kinematic", behaviour=BEHAVIOUR, placements=[{"holder": Pose((0.9, 0.2, 0.04))}])  # fmt: skip
+
+
+def test_executions_outside_stlopt_take_one_placement(tmp_path):
+    from stl_lfd.optim.asktell import ask_new
+    from stl_lfd.optim.resume import inputs_record
+    from stl_lfd.optim.run import objective_for
+
+    task = load_task(placed_task(tmp_path))
+    with pytest.raises(ConfigError, match="takes one placement"):
+        ask_new(task, tmp_path / "run", inputs_record(task, {}, task))
+    command = task.with_overrides(backend="command", command=__import__("stl_lfd").Command.parse("true"))
+    with pytest.raises(ConfigError, match="several placements need a simulated backend"):
+        objective_for(command, {}, execute=False)
+    assert not (tmp_path / "run").exists()
