@@ -86,7 +86,7 @@ def test_the_unoptimised_behaviour_picks_then_pushes_the_shaft_onto_the_holder(p
     from stl_lfd.sim import TrackingWarning, execute, load_scene
 
     behaviour, scene = load_behaviour(BEHAVIOUR), load_scene("pick_insert")
-    reference = behaviour_reference(behaviour, pick_insert_models, scene.gripper_opening, 48)
+    reference = behaviour_reference(behaviour, pick_insert_models, scene.gripper_opening, 48, scene.frame_poses)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TrackingWarning)
         runs = [execute(reference, scene, "pybullet").signals for _ in range(3)]

@@ -18,6 +18,13 @@ PLACEMENTS = """placements:
 """
 
 
+@pytest.fixture(scope="module")
+def behaviour_models():
+    from stl_lfd.optim.run import task_models
+
+    return task_models(load_task(placed_task(Path(__import__("tempfile").mkdtemp()))))
+
+
 def phi1_task(tmp_path: Path, model: Path, frame: str = "") -> Path:
     path = tmp_path / f"phi1-{model.stem}.yaml"
     path.write_text(
@@ -91,13 +98,12 @@ def test_several_placements_score_the_worst_and_record_each(tmp_path):
         ("", "{components: [6], frame: cup}", r"the model has no frame cup \(its frames: base, shaft, holder\)"),
     ],
 )
-def test_bad_placements_and_frames_name_the_file_and_key(tmp_path, extra, means, message):
-    from stl_lfd.optim.run import objective_for, task_models
+def test_bad_placements_and_frames_name_the_file_and_key(tmp_path, extra, means, message, behaviour_models):
+    from stl_lfd.optim.run import objective_for
 
     path = placed_task(tmp_path, extra, means) if means else placed_task(tmp_path, extra)
     with pytest.raises(ConfigError) as error:
-        task = load_task(path)
-        objective_for(task, task_models(task), execute=False)
+        objective_for(load_task(path), behaviour_models, execute=False)
     assert str(path) in str(error.value) and __import__("re").search(message, str(error.value)), str(error.value)
 
 
