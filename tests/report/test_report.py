@@ -88,4 +88,4 @@ def test_report_of_a_behaviour_run_draws_each_skill(tmp_path):
     for name in FIGURES:
         assert_picture(tmp_path / "report" / f"{name}.png")
     page = (tmp_path / "report" / "index.html").read_text()
-    assert "pick.duration[1]" in page and "insert.mean[5+6].x" in page
+    assert "pick.duration[1]" in page and "insert.mean[5+6].holder.x" in page
