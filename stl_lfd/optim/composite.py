@@ -79,6 +79,7 @@ def propose_composite(
     seed: int,
     count: int = 1,
     pending: np.ndarray | None = None,
+    groups: int = 1,
 ) -> np.ndarray:
     """The next point (or batch of `count` points) of composite BO.
 
@@ -95,17 +96,29 @@ def propose_composite(
             "Kriging believer", which leaves the mean unchanged and shrinks the variance around
             them), with the same GP hyperparameters.
         pending: `p x d` points being executed (not observed yet), treated the same way.
+        groups: the parts are `groups` equal groups side by side (the spec's parts at each of
+            several object placements): each group composes by `semantics`, and the result is
+            the minimum over the groups.
 
     Returns:
         `d` next point, or `count x d` points when `count > 1`.
     """
     with single_threaded():
-        points = _maximise(X, parts, Y, bounds, semantics, initial, seed, count, pending)
+        points = _maximise(X, parts, Y, bounds, semantics, initial, seed, count, pending, groups)
     return points[0] if count == 1 else points
 
 
 def _maximise(
-    X: np.ndarray, parts: np.ndarray, Y: np.ndarray, bounds: np.ndarray, semantics: Semantics, initial: int, seed: int, count: int, pending: np.ndarray | None
+    X: np.ndarray,
+    parts: np.ndarray,
+    Y: np.ndarray,
+    bounds: np.ndarray,
+    semantics: Semantics,
+    initial: int,
+    seed: int,
+    count: int,
+    pending: np.ndarray | None,
+    groups: int = 1,
 ) -> np.ndarray:
     import torch
 
@@ -119,13 +132,13 @@ def _maximise(
     for index in range(count):
         if executing or chosen:
             posterior = PartsPosterior(model).with_pending(torch.as_tensor(np.array(executing + chosen), dtype=torch.float64))
-        acquisition = composed_log_ei(model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed + index, posterior)
+        acquisition = composed_log_ei(model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed + index, posterior, groups)
         chosen.append(maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed + index))
     points = bounds[0] + np.array(chosen) * (bounds[1] - bounds[0])
     return np.clip(points, bounds[0], bounds[1])
 
 
-def composed_log_ei(model, best: float, scale: float, semantics: Semantics, parts: int, seed: int, posterior: "PartsPosterior | None" = None):
+def composed_log_ei(model, best: float, scale: float, semantics: Semantics, parts: int, seed: int, posterior: "PartsPosterior | None" = None, groups: int = 1):
     """Log expected improvement of the composed robustness over `best`, by quasi-Monte Carlo.
 
     The parts' GPs are independent, so at one point their joint posterior is `m` independent
@@ -152,7 +165,7 @@ def composed_log_ei(model, best: float, scale: float, semantics: Semantics, part
         def forward(self, X):  # b x 1 x d -> b
             mean, std = posterior(X[..., 0, :])  # b x m each
             samples = mean.unsqueeze(-2) + std.unsqueeze(-2) * normal  # b x S x m
-            improvement = (compose(samples, semantics) - best) / temperature  # b x S
+            improvement = (compose(samples, semantics, groups) - best) / temperature  # b x S
             log_softplus = torch.where(improvement < -30, improvement, torch.nn.functional.softplus(improvement).clamp_min(1e-300).log())
             return torch.logsumexp(log_softplus, dim=-1) - math.log(MC_SAMPLES) + math.log(temperature)
 
@@ -239,12 +252,18 @@ def fit_multi_output_gp(unit_X, parts: np.ndarray):
     return fit_hyperparameters(SingleTaskGP(train_X, train_Y, outcome_transform=Standardize(train_Y.shape[-1])))
 
 
-def compose(values, semantics: Semantics):
+def compose(values, semantics: Semantics, groups: int = 1):
     """The spec's robustness from its parts' values in torch: `... x m` -> `...`.
 
     The same formulas as `stl_lfd.stl` (minimum for classic, the new robustness's n-ary
-    conjunction), written so that gradients stay finite in both branches."""
+    conjunction), written so that gradients stay finite in both branches. With `groups`, the
+    `m` values are that many groups of parts side by side, and the result is the minimum of
+    the groups' compositions."""
     import torch
+
+    if groups > 1:
+        grouped = values.reshape(*values.shape[:-1], groups, values.shape[-1] // groups)
+        return compose(grouped, semantics).min(dim=-1).values
 
     minimum = values.min(dim=-1, keepdim=True).values
     if semantics.name == "classic":

@@ -125,7 +125,10 @@ def _composite_points(
     semantics = parts.semantics if parts is not None else Semantics("classic")
     if composite is None:  # trials recorded without their parts (an older run): the robustness alone
         composite, semantics = Y[:, None], Semantics("classic")
-    points = propose_composite(X, composite, Y, bounds, semantics, optimizer.initial, optimizer.seed + len(history), count, pending if len(pending) else None)
+    groups = getattr(parts, "groups", 1) if composite.shape[1] > 1 else 1
+    points = propose_composite(
+        X, composite, Y, bounds, semantics, optimizer.initial, optimizer.seed + len(history), count, pending if len(pending) else None, groups
+    )
     return points[None] if count == 1 else points
 
 

@@ -26,12 +26,15 @@ from stl_lfd.stl import Semantics, SpecParts, ast, load_spec, split_spec
 
 @dataclass(frozen=True)
 class Placements:
-    """How the robustness at several object placements composes: the worst of them. Offers what
-    the optimiser reads of `SpecParts` (`names`, `semantics`), so that composite BO models each
-    placement's robustness with its own GP output and takes their minimum."""
+    """The parts of a trial at several object placements: the spec's parts at each placement
+    (`names` in placement order, `placement i (...): part`), composed by the spec's semantics
+    within a placement and by the minimum over the `groups` placements. Offers what the
+    optimiser reads of `SpecParts`, so that composite BO models each part at each placement
+    with its own GP output."""
 
     names: tuple[str, ...]
-    semantics: Semantics = Semantics("classic")
+    semantics: Semantics
+    groups: int
 
 
 class SkillObjective:
@@ -41,7 +44,7 @@ class SkillObjective:
     `objective_for`) it only scores signals recorded elsewhere.
 
     With several object placements (`task.placements`), a trial executes once per placement and
-    its robustness is the worst; its parts are then the placements' robustness values, and its
+    its robustness is the worst; its parts are then the spec's parts at each placement, and its
     payload the signals of the worst placement."""
 
     def __init__(
@@ -57,7 +60,8 @@ class SkillObjective:
         """The parts the optimiser models: the spec's, or one per placement."""
         if len(self.scenes) == 1:
             return self.parts
-        return Placements(tuple(placement_label(index, placement) for index, placement in enumerate(self.task.placements)))
+        labels = [placement_label(index, placement) for index, placement in enumerate(self.task.placements)]
+        return Placements(tuple(f"{label}: {part}" for label in labels for part in self.parts.names), self.parts.semantics, len(labels))
 
     def close(self) -> None:
         if self.backend is not None:
@@ -87,7 +91,8 @@ class SkillObjective:
         if len(outcomes) == 1:
             return outcomes[0]
         worst = min(outcomes, key=lambda outcome: outcome.robustness)
-        return Outcome(worst.robustness, worst.payload, dict(zip(self.composition.names, (outcome.robustness for outcome in outcomes))))
+        values = [value for outcome in outcomes for value in outcome.components.values()]
+        return Outcome(worst.robustness, worst.payload, dict(zip(self.composition.names, values)))
 
     def score(self, signals: SignalTable) -> Outcome:
         """The robustness of recorded `signals`, and of each of the spec's parts."""

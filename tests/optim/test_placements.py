@@ -71,10 +71,12 @@ def test_several_placements_score_the_worst_and_record_each(tmp_path):
     assert np.abs(references[0].positions[-1] - references[1].positions[-1]).max() > 0.05  # the skill follows the holder
     optimise(prepared)
     trials = [json.loads(line) for line in (tmp_path / "run" / "trials.jsonl").read_text().splitlines()]
+    parts = objective.parts
     for trial in trials:
-        values = list(trial["components"].values())
-        assert [name.split(" (")[0] for name in trial["components"]] == ["placement 1", "placement 2"]
-        assert trial["robustness"] == min(values)
+        names, values = list(trial["components"]), np.array(list(trial["components"].values()))
+        assert [name.split(" (")[0] for name in names] == ["placement 1"] * 2 + ["placement 2"] * 2
+        assert [name.split(": ", 1)[1] for name in names] == list(parts.names) * 2
+        assert trial["robustness"] == pytest.approx(min(parts.compose(values[:2]), parts.compose(values[2:])))
     assert "insert.mean[5+6].holder.x" in trials[0]["parameters"]
     recorded = (tmp_path / "run" / "task.yaml").read_text()
     assert "placements:" in recorded and "frame: holder" in recorded
@@ -127,7 +129,7 @@ def test_optimize_from_python_takes_placements():
         behaviour=BEHAVIOUR,
         placements=placements,
     )
-    assert len(result.history) == 2 and len(result.history[0].components) == 2
+    assert len(result.history) == 2 and len(result.history[0].components) == 4  # two placements of two parts
     with pytest.raises(ConfigError, match="outside the area"):
         optimize(models, ROOT / "specs" / "phi3_strict_objects.stl", {"insert": Parameters(means=MeanParameters(components=(6,), frame="holder"))},
                  duration=48, rate=20, scene="pick_insert", backend="kinematic", behaviour=BEHAVIOUR, placements=[{"holder": Pose((0.9, 0.2, 0.04))}])  # fmt: skip
@@ -145,3 +147,16 @@ def test_executions_outside_stlopt_take_one_placement(tmp_path):
     with pytest.raises(ConfigError, match="several placements need a simulated backend"):
         objective_for(command, {}, execute=False)
     assert not (tmp_path / "run").exists()
+
+
+def test_grouped_parts_compose_per_placement_then_take_the_worst():
+    import torch
+
+    from stl_lfd.optim.composite import compose
+    from stl_lfd.stl import Semantics, split_spec
+    from stl_lfd.stl import load_spec as read
+
+    parts = split_spec(read(ROOT / "specs" / "phi3_strict_objects.stl"), "new")
+    values = np.array([[0.02, 0.5, -0.01, 0.3, 0.04, 0.6]])  # three placements of two parts
+    expected = min(parts.compose(values[0, i : i + 2]) for i in (0, 2, 4))
+    assert float(compose(torch.as_tensor(values), Semantics("new"), groups=3)[0]) == pytest.approx(expected)
