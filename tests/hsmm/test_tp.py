@@ -24,6 +24,7 @@ def moved(demo: SignalTable, motion: Pose) -> SignalTable:
     return SignalTable(demo.times, {name: points[:, index] for index, name in enumerate("xyz")}, demo.source)
 
 
+@pytest.mark.slow
 def test_a_single_base_frame_is_the_plain_hsmm():
     folder = ROOT / "demos" / "three_regions"
     plain, _ = learn_from_folder(folder, 6)
@@ -34,6 +35,7 @@ def test_a_single_base_frame_is_the_plain_hsmm():
     assert np.array_equal(retrieve(plain, rate=240).positions, retrieve(framed, rate=240).positions)
 
 
+@pytest.mark.slow
 def test_moving_demonstrations_and_frames_together_leaves_the_frame_model_and_moves_the_retrieval():
     demos = load_demos(INSERT)
     poses = load_demo_frames(demos)
@@ -51,6 +53,7 @@ def test_moving_demonstrations_and_frames_together_leaves_the_frame_model_and_mo
     assert np.abs(RIGID.to_base(here) - there).max() < 1e-6
 
 
+@pytest.mark.slow
 def test_the_retrieved_pick_ends_at_the_shaft_wherever_it_stands():
     model, _ = learn_from_folder(PICK, 6)
     assert model.frame_names_ == ["base", "shaft"]
