@@ -103,39 +103,23 @@ def propose_composite(
     Returns:
         `d` next point, or `count x d` points when `count > 1`.
     """
-    with single_threaded():
-        points = _maximise(X, parts, Y, bounds, semantics, initial, seed, count, pending, groups)
-    return points[0] if count == 1 else points
-
-
-def _maximise(
-    X: np.ndarray,
-    parts: np.ndarray,
-    Y: np.ndarray,
-    bounds: np.ndarray,
-    semantics: Semantics,
-    initial: int,
-    seed: int,
-    count: int,
-    pending: np.ndarray | None,
-    groups: int = 1,
-) -> np.ndarray:
     import torch
 
-    torch.manual_seed(seed)
-    unit = (X - bounds[0]) / (bounds[1] - bounds[0])
-    model = fit_multi_output_gp(unit, parts)
-    posterior = PartsPosterior(model)
-    box = _trust_box(unit[int(np.argmax(Y))], trust_region_length(Y, initial))
-    executing = [] if pending is None else list((pending - bounds[0]) / (bounds[1] - bounds[0]))
-    chosen: list[np.ndarray] = []
-    for index in range(count):
-        if executing or chosen:
-            posterior = PartsPosterior(model).with_pending(torch.as_tensor(np.array(executing + chosen), dtype=torch.float64))
-        acquisition = composed_log_ei(model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed + index, posterior, groups)
-        chosen.append(maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed + index))
-    points = bounds[0] + np.array(chosen) * (bounds[1] - bounds[0])
-    return np.clip(points, bounds[0], bounds[1])
+    with single_threaded():
+        torch.manual_seed(seed)
+        unit = (X - bounds[0]) / (bounds[1] - bounds[0])
+        model = fit_multi_output_gp(unit, parts)
+        posterior = PartsPosterior(model)
+        box = _trust_box(unit[int(np.argmax(Y))], trust_region_length(Y, initial))
+        executing = [] if pending is None else list((pending - bounds[0]) / (bounds[1] - bounds[0]))
+        chosen: list[np.ndarray] = []
+        for index in range(count):
+            if executing or chosen:
+                posterior = PartsPosterior(model).with_pending(torch.as_tensor(np.array(executing + chosen), dtype=torch.float64))
+            acquisition = composed_log_ei(model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed + index, posterior, groups)
+            chosen.append(maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed + index))
+    points = np.clip(bounds[0] + np.array(chosen) * (bounds[1] - bounds[0]), bounds[0], bounds[1])
+    return points[0] if count == 1 else points
 
 
 def composed_log_ei(model, best: float, scale: float, semantics: Semantics, parts: int, seed: int, posterior: "PartsPosterior | None" = None, groups: int = 1):
