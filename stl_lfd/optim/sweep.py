@@ -224,14 +224,14 @@ def local_map(function: Callable[[Any], Any], items: Iterable[Any], jobs: int) -
     items = list(items)
     if not items:
         return
+    from stl_lfd.optim.workers import run_stoppable, stop_children
+
     pool = ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"), initializer=_start_worker)
-    futures = {pool.submit(_call, function, item): item for item in items}
+    futures = {pool.submit(run_stoppable, function, item): item for item in items}
     try:
         for future in as_completed(futures):
             yield futures[future], future.result()
     except BaseException:  # Ctrl-C or a failed item: stop the workers now, not after their items
-        from stl_lfd.optim.workers import stop_children
-
         stop_children()
         pool.shutdown(wait=True, cancel_futures=True)
         raise
@@ -272,36 +272,11 @@ def ray_results(cells: Iterable[Cell], address: str | None) -> Iterator[CellResu
 
 
 def _start_worker() -> None:
-    """A local worker: one thread; Ctrl-C is the main process's to handle, which ends the
-    workers with SIGTERM, turned into KeyboardInterrupt so that their scratch folders go."""
-    import signal
+    """A local worker: one thread; stopped by SIGTERM, its cell's scratch folder is removed."""
+    from stl_lfd.optim.workers import THREAD_VARIABLES, stop_on_sigterm
 
-    for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-        os.environ[name] = "1"
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, _terminated)
-
-
-_busy = False  # whether a local worker is computing an item
-
-
-def _terminated(number: int, frame: object) -> None:
-    if _busy:
-        raise KeyboardInterrupt  # the item's clean-up (its scratch folder) runs, then `_call` exits
-    os._exit(128 + number)
-
-
-def _call(function: Callable[[Any], Any], item: Any) -> Any:
-    """`function(item)` in a local worker; stopped (SIGTERM), the worker exits once its item's
-    clean-up has run (the pool would otherwise catch the interrupt and wait for more work)."""
-    global _busy
-    _busy = True
-    try:
-        return function(item)
-    except KeyboardInterrupt:
-        os._exit(130)
-    finally:
-        _busy = False
+    os.environ.update({name: "1" for name in THREAD_VARIABLES})
+    stop_on_sigterm()
 
 
 def run_sweep(

@@ -13,7 +13,7 @@ import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -70,13 +70,11 @@ class WorkerPool:
 
 def _start(task: Task, models: dict[str, HSMM], run_dir: Path | None) -> None:
     global _objective
-    import signal
     import warnings
 
     from stl_lfd.optim.run import objective_for
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the main process's to handle
-    signal.signal(signal.SIGTERM, _terminated)
+    stop_on_sigterm()
     # The next batch's proposal (in the main process) runs beside the batch's rollouts and is the
     # longer of the two: the rollouts yield the CPU to it, so that it never waits behind them.
     os.nice(WORKER_NICENESS)
@@ -90,23 +88,40 @@ def _ready() -> bool:
     return _objective is not None
 
 
-def _terminated(number: int, frame: object) -> None:
-    if _busy:
-        raise KeyboardInterrupt  # unwinds through the command backend, which stops its command
-    os._exit(128 + number)
-
-
 def _evaluate(x: np.ndarray, trial: int) -> Outcome | str:
+    try:
+        return run_stoppable(_objective, x, trial)
+    except Exception as error:
+        return describe_error(error)
+
+
+def stop_on_sigterm() -> None:
+    """In a worker process: ignore Ctrl-C (the main process's to handle) and make SIGTERM stop
+    the work in progress through its clean-up (`run_stoppable`), or end an idle worker."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _terminated)
+
+
+def run_stoppable(function: Callable[..., Any], *args: Any) -> Any:
+    """`function(*args)` in a worker that `stop_on_sigterm` set up: stopped, it unwinds (an
+    executor command is stopped, a scratch folder removed) and the worker exits, instead of the
+    pool catching the interrupt and waiting for more work."""
     global _busy
     _busy = True
     try:
-        return _objective(x, trial)
-    except KeyboardInterrupt:  # stopped: the executor command (if any) is stopped by now; exit
+        return function(*args)
+    except KeyboardInterrupt:
         os._exit(130)
-    except Exception as error:
-        return describe_error(error)
     finally:
         _busy = False
+
+
+def _terminated(number: int, frame: object) -> None:
+    if _busy:
+        raise KeyboardInterrupt
+    os._exit(128 + number)
 
 
 def stop_children(grace: float = 5.0) -> None:
