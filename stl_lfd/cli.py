@@ -326,10 +326,7 @@ def _placements(scene_name: str, place: list[str]):
         return None
     from stl_lfd.sim import load_scene
 
-    scene = load_scene(scene_name)
-    placement = scene.placement_from_options(place)
-    scene.place(placement)
-    return (placement,)
+    return (load_scene(scene_name).placement_from_options(place),)
 
 
 def _backend(name: str, command):

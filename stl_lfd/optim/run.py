@@ -54,14 +54,8 @@ class SkillObjective:
         self.scenes = [scene.place(placement, str(task.source)) for placement in task.placements] or [scene]
         self.scene = self.scenes[0]
         self.backend = backend
-
-    @property
-    def composition(self) -> SpecParts | Placements:
-        """The parts the optimiser models: the spec's, or one per placement."""
-        if len(self.scenes) == 1:
-            return self.parts
-        labels = [placement_label(index, placement) for index, placement in enumerate(self.task.placements)]
-        return Placements(tuple(f"{label}: {part}" for label in labels for part in self.parts.names), self.parts.semantics, len(labels))
+        # The parts the optimiser models: the spec's, or the spec's at each placement.
+        self.composition: SpecParts | Placements = parts if len(self.scenes) == 1 else placement_parts(parts, task.placements)
 
     def close(self) -> None:
         if self.backend is not None:
@@ -164,10 +158,13 @@ def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = N
     return space, SkillObjective(models, space, task, behaviour, scene, parts, backend)
 
 
-def placement_label(index: int, placement: dict) -> str:
-    """`placement 2 (holder 0.6,0.25,0.04 yaw 0.3)`: how a placement's robustness is named."""
-    poses = ", ".join(f"{name} {','.join(f'{v:g}' for v in pose.position)} yaw {pose.yaw:g}" for name, pose in placement.items())
-    return f"placement {index + 1} ({poses})"
+def placement_parts(parts: SpecParts, placements: tuple[dict, ...]) -> Placements:
+    """The spec's parts at each placement, named `placement 2 (holder 0.6,0.25,0.04 yaw 0.3): PART`."""
+    labels = []
+    for index, placement in enumerate(placements):
+        poses = ", ".join(f"{name} {','.join(f'{v:g}' for v in pose.position)} yaw {pose.yaw:g}" for name, pose in placement.items())
+        labels.append(f"placement {index + 1} ({poses})")
+    return Placements(tuple(f"{label}: {part}" for label in labels for part in parts.names), parts.semantics, len(labels))
 
 
 def prepare_objective(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = None) -> tuple[SearchSpace, SkillObjective, Outcome, Summary]:

@@ -151,6 +151,7 @@ class Scene:
             if name in placement:
                 raise ConfigError(f"{option} {text}: {name} is placed twice")
             placement[name] = pose
+        self.check_placement(placement, option)
         return placement
 
     def placement_from_yaml(self, data: Any, path: Path | str, where: str) -> dict[str, Pose]:
@@ -172,21 +173,26 @@ class Scene:
                 raise ConfigError(
                     f"{path}: '{where}.{name}' must be [x, y], [x, y, z], [x, y, z, yaw] or {{position: [x, y, z], yaw: RAD}} (got {shown(value)})"
                 )
-        self.place(placement, f"{path}: '{where}'")  # checks the areas
+        self.check_placement(placement, f"{path}: '{where}'")
         return placement
 
-    def place(self, placements: Mapping[str, Pose], source: str = "--place") -> "Scene":
-        """A copy with frames moved to `placements` (name -> pose), their objects with them.
+    def check_placement(self, placements: Mapping[str, Pose], source: str = "--place") -> None:
+        """ConfigError (naming `source`) for a frame the scene lacks or a position outside the
+        frame's area."""
+        frames = {frame.name: frame for frame in self.frames}
+        for name, pose in placements.items():
+            if name not in frames:
+                raise ConfigError(f"{source}: the scene {self.name} has no object frame '{name}' (its frames: {', '.join(frames) or 'none'})")
+            _check_area(frames[name], pose, source)
 
-        ConfigError for a frame the scene lacks or a position outside the frame's area."""
+    def place(self, placements: Mapping[str, Pose], source: str = "--place") -> "Scene":
+        """A copy with frames moved to `placements` (name -> pose), their objects with them;
+        checked as `check_placement` does."""
+        self.check_placement(placements, source)
         frames = {frame.name: frame for frame in self.frames}
         objects = {item.name: item for item in self.objects}
         for name, pose in placements.items():
-            if name not in frames:
-                known = ", ".join(frames) or "none"
-                raise ConfigError(f"{source}: the scene {self.name} has no object frame '{name}' (its frames: {known})")
             frame = frames[name]
-            _check_area(frame, pose, source)
             for object_name in frame.objects:
                 item = objects[object_name]
                 local = frame.pose.from_base(np.array([item.position]))
