@@ -44,9 +44,7 @@ def model_frames(poses: list[dict[str, Pose]] | None, chosen: list[str] | None, 
     if unknown:
         where = f"the sidecars give {', '.join(available[1:])}" if poses else f"no demonstration has a frame sidecar (*{SIDECAR_SUFFIX})"
         raise ModelError(f"{source}: no frame {', '.join(unknown)} ({where})")
-    if not chosen or len(set(chosen)) != len(chosen):
-        raise ModelError(f"{source}: frames must be distinct names (got {', '.join(chosen) or 'none'})")
-    return list(chosen)
+    return list(chosen)  # distinct and not empty: `TPHSMM.fit` checks
 
 
 def learn(

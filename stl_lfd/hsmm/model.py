@@ -238,12 +238,18 @@ class HSMM:
         return list(self.signal_names_)
 
     def coordinate(self, name: str, frame: str | None = None) -> int:
-        """The column of `means_` holding signal `name` (ModelError when there is none)."""
-        if frame is not None:
-            raise ModelError(f"the model has no frames (it was learned without frame sidecars), so there is no frame {frame}")
+        """The column of `means_` holding signal `name` (in `frame`, for a model with frames);
+        ModelError when there is none."""
+        offset = self._frame_offset(frame)
         if name not in self.signal_names_:
             raise ModelError(f"the model has no signal {name} ({', '.join(self.signal_names_)})")
-        return self.signal_names_.index(name)
+        return offset + self.signal_names_.index(name)
+
+    def _frame_offset(self, frame: str | None) -> int:
+        """Where the columns of `frame` start in `means_` (only one frame here: no name)."""
+        if frame is not None:
+            raise ModelError(f"the model has no frames (it was learned without frame sidecars), so there is no frame {frame}")
+        return 0
 
     # --- EM internals ----------------------------------------------------------------------
 

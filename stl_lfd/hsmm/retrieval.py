@@ -97,7 +97,8 @@ def _tracked(model: HSMM, states: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
     end = model.end_target()
     if end is None or states[-1] != end[0]:
         return np.asarray(model.means_), np.asarray(model.covars_), states
-    final_run = len(states) - int(np.argmax(states[::-1] != end[0])) if np.any(states != end[0]) else 0
+    before = np.flatnonzero(states != end[0])
+    final_run = before[-1] + 1 if before.size else 0  # where the final state's run starts
     switch = final_run + max(1, int(round(model.duration_means_[end[0]] / model.sample_period_ / 2)))
     segments = states.copy()
     segments[switch:] = model.n_states

@@ -71,9 +71,6 @@ class TPHSMM(HSMM):
         """The skill for frames at `poses` (name -> pose; every frame but `base` required):
         an `HSMM` in the base frame whose state Gaussians are the products of the frames'."""
         self._check()
-        missing = [name for name in self.frame_names_ if name != BASE_FRAME and name not in poses]
-        if missing:
-            raise ModelError(f"no pose for frame {', '.join(missing)} (the model's frames: {', '.join(self.frame_names_)})")
         D, names = len(self.signal_names_), self.signal_names_
         end = self.end_target()
         # The end point's Gaussian travels with the states' as one more row.
@@ -97,27 +94,16 @@ class TPHSMM(HSMM):
         model.sample_period_, model.signal_names_ = self.sample_period_, list(names)
         return model
 
-    def frame_means(self, frame: str) -> np.ndarray:
-        """`K x D` state means in `frame`."""
-        index = self._frame_index(frame)
-        D = len(self.signal_names_)
-        return np.asarray(self.means_)[:, index * D : (index + 1) * D]
-
     @property
     def feature_names(self) -> list[str]:
         return [f"{frame}.{name}" for frame in self.frame_names_ for name in self.signal_names_]
 
-    def coordinate(self, name: str, frame: str | None = None) -> int:
+    def _frame_offset(self, frame: str | None) -> int:
         if frame is None:
             raise ModelError(f"the model has frames ({', '.join(self.frame_names_)}): say in which one the mean moves ('frame:')")
-        if name not in self.signal_names_:
-            raise ModelError(f"the model has no signal {name} ({', '.join(self.signal_names_)})")
-        return self._frame_index(frame) * len(self.signal_names_) + self.signal_names_.index(name)
-
-    def _frame_index(self, frame: str) -> int:
         if frame not in self.frame_names_:
             raise ModelError(f"the model has no frame {frame} (its frames: {', '.join(self.frame_names_)})")
-        return self.frame_names_.index(frame)
+        return self.frame_names_.index(frame) * len(self.signal_names_)
 
     def _check(self) -> None:
         if not hasattr(self, "frame_names_"):
@@ -141,7 +127,7 @@ def _pose(poses: Mapping[str, Pose], frame: str) -> Pose:
     if frame == BASE_FRAME:
         return poses.get(BASE_FRAME, Pose())
     if frame not in poses:
-        raise ModelError(f"no pose for frame {frame}")
+        raise ModelError(f"no pose for frame {frame} (given: {', '.join(poses) or 'none'})")
     return poses[frame]
 
 
