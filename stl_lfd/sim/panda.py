@@ -91,7 +91,9 @@ class PandaWorld:
         self.objects = {item.name: self._add_object(item) for item in scene.objects}
         self.movable = [self.objects[item.name] for item in scene.objects if item.mass > 0]
         self.held: tuple[int, int] | None = None  # (object body, constraint)
-        self._frame_anchors = [self._anchor(frame) for frame in scene.frames]
+        # Frame origins: fixed ones once; moving ones as (row, body, origin in the body's frame).
+        self._frame_positions = np.array([frame.pose.position for frame in scene.frames], dtype=float).reshape(-1, 3)
+        self._moving_frames = [(index, *anchor) for index, frame in enumerate(scene.frames) if (anchor := self._anchor(frame)) is not None]
         for region in scene.regions:
             self._add_region(region)
         for joint, angle in zip(ARM_JOINTS + FINGER_JOINTS, REST_POSE):
@@ -120,28 +122,25 @@ class PandaWorld:
         client.changeDynamics(body, -1, lateralFriction=item.friction)
         return body
 
-    def _anchor(self, frame: SceneFrame) -> tuple[int, np.ndarray] | np.ndarray:
-        """How to find the frame's origin: fixed (its position), or moving with its first
-        movable object (that body and the origin in the body's frame)."""
+    def _anchor(self, frame: SceneFrame) -> tuple[int, tuple[float, float, float] | None] | None:
+        """None for a fixed frame; for one that moves with its first movable object, that body
+        and the frame's origin in the body's frame (None when it is the body's origin)."""
         masses = {item.name: item.mass for item in self.scene.objects}
         movable = [name for name in frame.objects if masses[name] > 0]
         if not movable:
-            return np.array(frame.pose.position)
+            return None
         body = self.objects[movable[0]]
         position, orientation = self.client.getBasePositionAndOrientation(body)
         inverse = self.client.invertTransform(position, orientation)
         local, _ = self.client.multiplyTransforms(inverse[0], inverse[1], frame.pose.position, (0.0, 0.0, 0.0, 1.0))
-        return body, np.array(local)
+        return body, (None if max(abs(value) for value in local) < 1e-12 else local)
 
     def frame_positions(self) -> np.ndarray:
         """`F x 3` positions of the scene's frames now (a grasped shaft's frame moves with it)."""
-        positions = np.empty((len(self._frame_anchors), 3))
-        for index, anchor in enumerate(self._frame_anchors):
-            if isinstance(anchor, np.ndarray):
-                positions[index] = anchor
-                continue
-            position, orientation = self.client.getBasePositionAndOrientation(anchor[0])
-            positions[index] = self.client.multiplyTransforms(position, orientation, anchor[1], (0.0, 0.0, 0.0, 1.0))[0]
+        positions = self._frame_positions.copy()
+        for index, body, local in self._moving_frames:
+            position, orientation = self.client.getBasePositionAndOrientation(body)
+            positions[index] = position if local is None else self.client.multiplyTransforms(position, orientation, local, (0.0, 0.0, 0.0, 1.0))[0]
         return positions
 
     def _add_region(self, region: Region) -> int:
