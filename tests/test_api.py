@@ -100,6 +100,7 @@ def test_parameters_are_checked_when_made(make, message):
         make()
 
 
+@pytest.mark.slow
 def test_learning_from_tables_in_memory_equals_learning_from_the_folder():
     folder = ROOT / "demos" / "three_regions"
     tables = [stl_lfd.read_signal_csv(path) for path in sorted(folder.glob("*.csv"))]

@@ -480,6 +480,7 @@ def test_bad_input(case: Case, workspace, tmp_path, monkeypatch):
     assert after == before, "the command changed its inputs or an existing run"
 
 
+@pytest.mark.slow
 def test_a_run_without_trials_yet_still_reports(workspace, tmp_path):
     shutil.copytree(workspace["run"], tmp_path / "run")
     (tmp_path / "run" / "trials.jsonl").write_text("")

@@ -25,7 +25,8 @@ from tests.conftest import ROOT
 
 NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?:\.\.\.)?")
 DURATION_AFTER = re.compile(r"^ ?(s\b|x real time)")
-SLOW_COMMANDS = ("stlopt optimize", "stlopt replay", "stlopt sweep")
+SLOW_COMMANDS = ("stlopt optimize", "stlopt replay", "stlopt sweep")  # write nothing a later example reads
+HEAVY_COMMANDS = ("stlopt learn", "stlopt retrieve", "stlopt rollout", "stlopt ask", "stlopt tell", "python ")  # seconds each
 
 
 @dataclass
@@ -123,15 +124,21 @@ def _is_slow(example: Example) -> bool:
     return example.command.startswith(SLOW_COMMANDS)
 
 
+def _is_marked_slow(example: Example) -> bool:
+    """Slow examples, and those that learn, execute or start Python (left out by `-m "not slow"`)."""
+    return _is_slow(example) or any(command in example.command for command in HEAVY_COMMANDS)
+
+
 _done: dict[int, subprocess.CompletedProcess] = {}
 
 
 def _run_up_to(index: int, folder: Path) -> subprocess.CompletedProcess:
     """Run example `index` after every earlier one that is not slow (examples use the files
     earlier ones wrote; the slow ones, a full optimisation, a filmed replay and a sweep, write nothing
-    a later example reads)."""
+    a later example reads). A light example needs only the light ones before it."""
     for earlier in range(index + 1):
-        if earlier not in _done and (earlier == index or not _is_slow(EXAMPLES[earlier])):
+        needed = not _is_slow(EXAMPLES[earlier]) and (_is_marked_slow(EXAMPLES[index]) or not _is_marked_slow(EXAMPLES[earlier]))
+        if earlier not in _done and (earlier == index or needed):
             environment = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}", COLUMNS="200")
             _done[earlier] = subprocess.run(
                 ["bash", "-o", "pipefail", "-c", EXAMPLES[earlier].command], cwd=folder, env=environment, capture_output=True, text=True, timeout=900
@@ -140,7 +147,8 @@ def _run_up_to(index: int, folder: Path) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.parametrize(
-    "index", [pytest.param(index, marks=[pytest.mark.slow] if _is_slow(example) else [], id=f"line{example.line}") for index, example in enumerate(EXAMPLES)]
+    "index",
+    [pytest.param(index, marks=[pytest.mark.slow] if _is_marked_slow(example) else [], id=f"line{example.line}") for index, example in enumerate(EXAMPLES)],
 )
 def test_readme_console_example(index, scratch):
     example = EXAMPLES[index]

@@ -20,6 +20,9 @@ from stl_lfd.optim.acquisition import propose, random_point, sobol_points
 from stl_lfd.optim.task import Optimizer
 from stl_lfd.stl import SpecParts
 
+STALL_GAIN = 0.1  # an improvement below this fraction of the distance to satisfaction is a stall
+STALL_TRIALS = 2  # stalled model-based trials in a row before a space-filling one
+
 
 @dataclass
 class Trial:
@@ -27,7 +30,8 @@ class Trial:
 
     Attributes:
         trial: 1-based number.
-        phase: `sobol` (the M initial trials), `stl`, `pi`, `logei` or `random`.
+        phase: `sobol` (the M initial trials), `stl`, `pi`, `logei` or `random`; `explore` for
+            the space-filling trials of method `stl` while it stalls (see `stalled`).
         x: `d` parameter values.
         robustness: the objective, or None when the trial failed.
         components: the robustness of each top-level part of the spec (its text -> value),
@@ -100,9 +104,31 @@ def next_points(
     if len(Y) == 0 or np.ptp(Y) == 0:  # every trial so far failed, or all gave the same value: nothing to model yet
         return [(random_point(bounds, optimizer.seed, trial), "random") for trial in range(index, end)]
     if optimizer.method == "stl":
-        points = _composite_points(before, X, Y, bounds, optimizer, parts, end - start, pending)
-        return [(point, "stl") for point in points[index - start :]]
+        batch: list[tuple[np.ndarray, str]] = []
+        if stalled(before, Y):
+            batch.append((sobol_points(bounds, start + 1, optimizer.seed)[start], "explore"))
+            pending = np.vstack([pending.reshape(-1, bounds.shape[1]), batch[0][0]])
+        if end - start > len(batch):
+            points = _composite_points(before, X, Y, bounds, optimizer, parts, end - start - len(batch), pending)
+            batch += [(point, "stl") for point in points]
+        return batch[index - start :]
     return [(propose(X, Y, bounds, optimizer.method, optimizer.xi, optimizer.seed + index), optimizer.method)]
+
+
+def stalled(history: list[Trial], Y: np.ndarray) -> bool:
+    """Whether method `stl` explores next: no trial satisfies the spec yet, and each of the last
+    `STALL_TRIALS` trials, chosen by the model, improved the best robustness before it by less
+    than `STALL_GAIN` of its distance to satisfaction (`Y`: the `n` observed values of
+    `history`).
+
+    Then the next trial is the next point of the run's scrambled Sobol sequence. On a spec
+    whose robustness misleads while it is violated (phi3_strict's force part grows away from
+    the hole while the shaft pushes on the holder), the model keeps proposing small gains
+    away from the satisfying region; space-filling trials in between find it."""
+    if np.max(Y) > 0 or len(history) <= STALL_TRIALS:
+        return False
+    recent = range(len(history) - STALL_TRIALS, len(history))
+    return all(history[i].phase == "stl" and Y[i] <= np.max(Y[:i]) + STALL_GAIN * abs(np.max(Y[:i])) for i in recent)
 
 
 def batch_of(index: int, optimizer: Optimizer) -> tuple[int, int]:

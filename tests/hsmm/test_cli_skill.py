@@ -33,6 +33,7 @@ def test_learn_writes_a_model_and_a_summary(tmp_path: Path):
     assert (tmp_path / "s.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_retrieve_writes_a_signal_csv(tmp_path: Path, learned):
     model_path = tmp_path / "m.npz"
     runner.invoke(app, ["learn", str(DEMOS), "-o", str(model_path)])

@@ -57,6 +57,7 @@ def recorded(run):
     return [(trial["x"], trial["robustness"], trial["status"], trial["error"]) for trial in trials]
 
 
+@pytest.mark.slow
 def test_an_ask_tell_loop_gives_the_trials_of_optimize(tmp_path, learned_model_file):
     task, first = start(tmp_path, learned_model_file)
     assert first.trial == 0 and first.reference == tmp_path / "asked" / "executions" / "initial" / "reference.csv"
@@ -87,6 +88,7 @@ def test_unsafe_trials_are_refused_as_optimize_refuses_them(tmp_path, learned_mo
     assert recorded(tmp_path / "asked") == recorded(tmp_path / "optimized")
 
 
+@pytest.mark.slow
 def test_asking_again_gives_the_same_trial_and_a_killed_tell_loses_nothing(tmp_path, learned_model_file, monkeypatch):
     _, first = start(tmp_path, learned_model_file)
     run = tmp_path / "asked"
@@ -108,6 +110,7 @@ def test_asking_again_gives_the_same_trial_and_a_killed_tell_loses_nothing(tmp_p
     assert [trial[0] for trial in recorded(run)] == [json.loads((run / "trials.jsonl").read_text().splitlines()[0])["x"]]
 
 
+@pytest.mark.slow
 def test_telling_the_wrong_thing_is_a_clear_error_and_keeps_the_trial_pending(tmp_path, learned_model_file):
     _, first = start(tmp_path, learned_model_file, spec="phi3")
     run = tmp_path / "asked"
@@ -145,6 +148,7 @@ def _first_lines(path, count):
     return "\n".join(Path(path).read_text().splitlines()[:count]) + "\n"
 
 
+@pytest.mark.slow
 def test_the_commands_print_paths_and_robustness_for_scripts(tmp_path, learned_model_file):
     task = task_file(tmp_path, learned_model_file, trials=2)
     run = tmp_path / "run"

@@ -66,7 +66,8 @@ def test_parts_of_failed_trials_enter_at_their_worst():
 def test_stl_method_is_reproducible_and_resumes_exactly():
     optimizer = Optimizer("stl", initial=4, trials=8, seed=2)
     first = run(optimizer)
-    assert [trial.phase for trial in first] == ["sobol"] * 4 + ["stl"] * 4
+    assert [trial.phase for trial in first][:5] == ["sobol"] * 4 + ["stl"]
+    assert set(trial.phase for trial in first[5:]) <= {"stl", "explore"}  # explores while it stalls, violated
     assert np.array_equal([t.x for t in first], [t.x for t in run(optimizer)])
     resumed = run(optimizer, run(Optimizer("stl", initial=4, trials=6, seed=2)))
     assert np.array_equal([t.x for t in resumed], [t.x for t in first])
@@ -90,5 +91,6 @@ def test_a_spec_that_is_not_a_conjunction_runs_through_the_same_path():
         return Outcome(value, components={single.names[0]: value})
 
     history = run_trials(objective, BOUNDS, Optimizer("stl", initial=4, trials=12, seed=0), [], lambda trial, payload: None, single)
-    assert [trial.phase for trial in history] == ["sobol"] * 4 + ["stl"] * 8
+    assert [trial.phase for trial in history][:5] == ["sobol"] * 4 + ["stl"]
+    assert set(trial.phase for trial in history[5:]) <= {"stl", "explore"}
     assert best_trial(history).robustness > max(trial.robustness for trial in history[:4])

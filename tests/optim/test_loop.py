@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from stl_lfd.optim.loop import Outcome, best_trial, run_trials
+from stl_lfd.optim.acquisition import sobol_points
+from stl_lfd.optim.loop import Outcome, Trial, best_trial, run_trials, stalled
 from stl_lfd.optim.task import Optimizer
 
 BOUNDS = np.array([[0.0, -1.0, 2.0], [1.0, 1.0, 4.0]])
@@ -41,6 +42,7 @@ def test_resuming_from_a_recorded_history_continues_exactly():
     assert np.array_equal(points(resumed), points(uninterrupted))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["pi", "logei", "random"])
 def test_every_method_stays_inside_the_bounds_and_shares_the_initial_design(method):
     history = run(Optimizer(method, initial=3, trials=7, seed=0))
@@ -76,3 +78,36 @@ def test_a_failing_trial_is_recorded_and_the_loop_goes_on():
     assert history[5].status == "failed" and "nan" in history[5].error
     assert history[1].robustness is None and not history[1].satisfied
     assert all(trial.status == "ok" for index, trial in enumerate(history) if index not in (1, 5))
+
+
+def test_stl_explores_with_the_sobol_sequence_while_it_stalls_on_a_violated_spec():
+    def hopeless(x):  # violated everywhere, with gains far below the distance to satisfaction
+        return Outcome(-1.0 - 1e-3 * float(x[0]))
+
+    history = run(Optimizer("stl", initial=3, trials=9, seed=2), function=hopeless)
+    assert [trial.phase for trial in history] == ["sobol"] * 3 + ["stl", "stl", "explore"] * 2
+    sobol = sobol_points(BOUNDS, 9, 2)
+    assert np.array_equal(points(history)[[5, 8]], sobol[[5, 8]])  # the design's own continuation
+
+
+def test_stl_does_not_explore_once_the_spec_is_satisfied_or_while_the_model_gains():
+    history = run(Optimizer("stl", initial=3, trials=6, seed=2), function=lambda x: Outcome(1.0 - 1e-3 * float(x[0])))
+    assert [trial.phase for trial in history][3:] == ["stl"] * 3
+    trial = lambda number, phase, value: Trial(number, phase, np.zeros(3), value)  # noqa: E731
+    values = [-1.0, -0.8, -0.78, -0.75]  # after the design, gains of 2.5 % and 4 % of the distance
+    history = [trial(1, "sobol", -1.0), trial(2, "sobol", -0.8), trial(3, "stl", -0.78), trial(4, "stl", -0.75)]
+    assert stalled(history, np.array(values))
+    assert not stalled(history[:3], np.array(values[:3]))  # one stalled trial is not a stall
+    assert not stalled(history[:3] + [trial(4, "stl", -0.7)], np.array(values[:3] + [-0.7]))  # gained 10.3 %
+    assert not stalled(history[:3] + [trial(4, "explore", -0.9)], np.array(values[:3] + [-0.9]))
+    assert not stalled(history[:3] + [trial(4, "stl", 0.1)], np.array(values[:3] + [0.1]))
+
+
+def test_a_stalled_batch_of_parallel_trials_starts_with_the_exploring_trial():
+    history = run(Optimizer("stl", initial=2, trials=12, seed=1, workers=2), function=lambda x: Outcome(-1.0 - 1e-3 * float(x[0])))
+    phases = [trial.phase for trial in history]
+    assert phases[:2] == ["sobol"] * 2 and "explore" in phases
+    for number, phase in enumerate(phases):
+        if phase == "explore":
+            assert (number - 2) % 2 == 0  # first in its batch
+            assert np.array_equal(history[number].x, sobol_points(BOUNDS, number + 1, 1)[number])

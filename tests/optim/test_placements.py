@@ -100,6 +100,7 @@ def test_several_placements_score_the_worst_and_record_each(tmp_path):
         ("", "{components: [6], frame: cup}", r"the model has no frame cup \(its frames: base, shaft, holder\)"),
     ],
 )
+@pytest.mark.slow
 def test_bad_placements_and_frames_name_the_file_and_key(tmp_path, extra, means, message, behaviour_models):
     from stl_lfd.optim.run import objective_for
 

@@ -26,6 +26,7 @@ def small_task(tmp_path: Path, model_file: Path, spec: str = "phi1", duration: f
     return path
 
 
+@pytest.mark.slow
 def test_a_run_writes_its_directory_as_it_goes(tmp_path, learned_model_file):
     task = load_task(small_task(tmp_path, learned_model_file))
     summary = optimise(start_run(task, tmp_path / "run"))
@@ -89,6 +90,7 @@ def test_a_spec_on_signals_that_rollouts_do_not_record_is_refused(tmp_path, lear
     assert not (tmp_path / "run").exists() and not list(tmp_path.glob(".run.*"))
 
 
+@pytest.mark.slow
 def test_cli_optimize_prints_the_summary_and_protects_existing_runs(tmp_path, learned_model_file):
     task = small_task(tmp_path, learned_model_file)
     out = tmp_path / "cli-run"
@@ -133,6 +135,7 @@ def test_the_paper_budget_satisfies_phi1_on_the_kinematic_backend(tmp_path):
         assert np.all((trial.x >= space.lower) & (trial.x <= space.upper)), trial.trial
 
 
+@pytest.mark.slow
 def test_ctrl_c_keeps_the_finished_trials_and_says_how_to_resume(tmp_path, learned_model_file, monkeypatch):
     from stl_lfd.optim import run as run_module
 

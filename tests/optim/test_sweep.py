@@ -51,6 +51,7 @@ def compared(folder):
     return [{key: row[key] for key in COMPARED} for row in read_table(folder)]
 
 
+@pytest.mark.slow
 def test_a_sweep_runs_every_cell_as_a_run_directory_and_skips_finished_ones(tmp_path, learned_model_file):
     plan = load_sweep(sweep_file(tmp_path, learned_model_file))
     assert [cell.name for cell in plan.cells] == ["small-stl-seed0", "small-stl-seed1", "small-random-seed0", "small-random-seed1"]
@@ -78,6 +79,7 @@ def test_a_sweep_runs_every_cell_as_a_run_directory_and_skips_finished_ones(tmp_
     assert groups[0].satisfied == sum(1 for record in records[:2] if record["satisfied"])
 
 
+@pytest.mark.slow
 def test_a_killed_sweep_finishes_only_the_missing_cells(tmp_path, learned_model_file):
     plan = load_sweep(sweep_file(tmp_path, learned_model_file))
 
@@ -132,6 +134,7 @@ def test_variants_change_task_keys_and_bad_sweeps_are_refused(tmp_path, learned_
             load_sweep(bad)
 
 
+@pytest.mark.slow
 def test_a_sweep_folder_holding_another_run_is_refused(tmp_path, learned_model_file):
     plan = load_sweep(sweep_file(tmp_path, learned_model_file, "trials: 2\n"))
     from stl_lfd.optim.sweep import run_cell

@@ -33,6 +33,7 @@ def test_batches_split_the_initial_trials_and_then_the_rest():
     assert [batch_of(index, Optimizer("stl", initial=3, trials=5)) for index in range(5)] == [(i, i + 1) for i in range(5)]
 
 
+@pytest.mark.slow
 def test_one_worker_proposes_from_the_whole_history_and_more_propose_a_batch_ahead():
     optimizer = Optimizer("stl", initial=4, trials=7, seed=2)
     sequential = run_trials(conjunction_objective, BOUNDS, optimizer, [], lambda trial, payload: None, PARTS)
@@ -58,6 +59,7 @@ def test_a_batch_is_reproducible_and_a_resume_inside_it_continues_exactly():
     assert len(batch) == 3 and len({tuple(np.round(x, 6)) for x, _ in batch}) == 3  # three distinct points
 
 
+@pytest.mark.slow
 def test_a_pending_point_keeps_the_mean_and_shrinks_the_variance_around_it():
     rng = np.random.default_rng(0)
     X = rng.random((12, 2))

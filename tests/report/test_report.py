@@ -70,6 +70,7 @@ def test_forces_and_comparison_when_the_data_is_there(run_dir, tmp_path):
     assert 'src="forces.png"' in (out / "index.html").read_text()
 
 
+@pytest.mark.slow
 def test_report_errors_are_one_line(run_dir, tmp_path):
     missing = runner.invoke(app, ["report", str(tmp_path / "nothing")])
     assert missing.exit_code == 9 and "no such run directory" in missing.stderr

@@ -14,6 +14,7 @@ runner = CliRunner()
 PHI1 = str(ROOT / "specs" / "phi1.stl")
 
 
+@pytest.mark.slow
 def test_rollout_writes_csv_to_stdout_for_a_pipeline(learned_model_file):
     result = runner.invoke(app, ["rollout", str(learned_model_file), "--duration", "20", "--rate", "50"])
     assert result.exit_code == 0, result.stderr

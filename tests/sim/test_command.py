@@ -98,6 +98,7 @@ def test_bundled_scenes_declare_safety_and_bad_limits_are_refused(tmp_path):
         load_scene(path)
 
 
+@pytest.mark.slow
 def test_the_command_backend_gives_what_the_in_process_backend_gives(tmp_path, learned_model_file):
     command_task = executor_task(tmp_path, learned_model_file)
     optimise(start_run(command_task, tmp_path / "command"))
@@ -108,6 +109,7 @@ def test_the_command_backend_gives_what_the_in_process_backend_gives(tmp_path, l
         assert {path.name for path in (tmp_path / "command" / "executions" / folder).iterdir()} == {"reference.csv", "signals.csv", "stdout.txt", "stderr.txt"}
 
 
+@pytest.mark.slow
 def test_placeholders_and_environment_reach_the_command(tmp_path, learned_model_file, monkeypatch):
     monkeypatch.setenv("EXECUTOR_MODE", "env")
     optimise(start_run(executor_task(tmp_path, learned_model_file, trials=1), tmp_path / "run"))
@@ -128,6 +130,7 @@ def test_placeholders_and_environment_reach_the_command(tmp_path, learned_model_
         ("delete", ExecutionError, r"trial-0001/reference.csv: the command removed or changed the reference it was given"),
     ],
 )
+@pytest.mark.slow
 def test_a_bad_executor_is_a_clear_error(tmp_path, monkeypatch, mode, error, message):
     monkeypatch.setenv("EXECUTOR_MODE", mode)
     monkeypatch.setenv("EXECUTOR_CHILD_PID", str(tmp_path / "child.pid"))
@@ -140,6 +143,7 @@ def test_a_bad_executor_is_a_clear_error(tmp_path, monkeypatch, mode, error, mes
         assert not _alive(int((tmp_path / "child.pid").read_text()))
 
 
+@pytest.mark.slow
 def test_a_failed_execution_fails_its_trial_and_the_run_goes_on_and_resumes(tmp_path, learned_model_file, monkeypatch):
     monkeypatch.setenv("EXECUTOR_MODE", "noforce")
     monkeypatch.setenv("EXECUTOR_BAD_TRIAL", "1")
@@ -163,6 +167,7 @@ def _alive(pid):
     return status not in ("Z", "X")
 
 
+@pytest.mark.slow
 def test_an_unsafe_reference_never_reaches_the_command(tmp_path, learned_model_file, monkeypatch):
     scene = tmp_path / "tight.yaml"
     scene.write_text("description: tight\nsafety:\n  workspace: {lower: [0.2, -0.6, 0.1], upper: [0.8, 0.6, 0.8]}\n  max_speed: 0.6\n")

@@ -22,11 +22,13 @@ def pybullet_rollout(reference):
     return execute(reference, SCENE, "pybullet", rate=100.0)
 
 
+@pytest.mark.slow
 def test_pybullet_tracks_the_retrieved_skill_within_5_mm(pybullet_rollout):
     assert pybullet_rollout.tracking_rms < 0.005
     assert pybullet_rollout.tracking_max < SCENE.tracking_tolerance
 
 
+@pytest.mark.slow
 def test_recorded_signals_follow_the_signal_format(pybullet_rollout):
     signals = pybullet_rollout.signals
     assert list(signals.columns) == ["x", "y", "z", "gripper", "force"]
@@ -35,6 +37,7 @@ def test_recorded_signals_follow_the_signal_format(pybullet_rollout):
     assert np.all(signals.columns["force"] == 0.0)  # nothing is touched in free space
 
 
+@pytest.mark.slow
 def test_the_same_reference_gives_identical_signals(reference, pybullet_rollout):
     again = execute(reference, SCENE, "pybullet", rate=100.0)
     for name, values in pybullet_rollout.signals.columns.items():

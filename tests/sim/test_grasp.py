@@ -68,6 +68,7 @@ def aligned():
     return rollout, tracker, shaft_position()
 
 
+@pytest.mark.slow
 def test_the_grasped_shaft_travels_with_the_hand(aligned):
     _, tracker, _ = aligned
     times, shaft, hand = np.array(tracker.times), np.array(tracker.shaft), np.array(tracker.hand)
@@ -77,12 +78,14 @@ def test_the_grasped_shaft_travels_with_the_hand(aligned):
     assert np.linalg.norm(shaft[transport][-1] - shaft[transport][0]) > 0.4  # and it went a long way
 
 
+@pytest.mark.slow
 def test_release_leaves_the_shaft_standing_in_the_holder(aligned):
     _, _, final = aligned
     assert np.allclose(final[:2], HOLE[:2], atol=0.006)
     assert final[2] == pytest.approx(0.08, abs=0.005)  # standing on the table inside the hole
 
 
+@pytest.mark.slow
 def test_force_is_zero_in_free_motion_and_small_when_aligned(aligned):
     rollout, _, _ = aligned
     force, times = rollout.signals.columns["force"], rollout.signals.times
@@ -91,6 +94,7 @@ def test_force_is_zero_in_free_motion_and_small_when_aligned(aligned):
     assert force.max() < 3.0
 
 
+@pytest.mark.slow
 def test_a_misaligned_insertion_pushes_hard_on_the_holder():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TrackingWarning)  # blocked by the holder, as intended
