@@ -11,11 +11,17 @@ settings.load_profile("default")
 
 
 @pytest.fixture(scope="session")
-def learned_model():
-    """The skill learned from the bundled three-region demonstrations (about 1 s to fit)."""
+def learned_skill():
+    """The skill learned from the bundled three-region demonstrations (about 1 s to fit) and
+    the resampled demonstrations it was learned from."""
     from stl_lfd.hsmm import learn_from_folder
 
-    return learn_from_folder(ROOT / "demos" / "three_regions", 6)[0]
+    return learn_from_folder(ROOT / "demos" / "three_regions", 6)
+
+
+@pytest.fixture(scope="session")
+def learned_model(learned_skill):
+    return learned_skill[0]
 
 
 @pytest.fixture(scope="session")

@@ -8,7 +8,7 @@ from scipy.spatial import cKDTree
 from typer.testing import CliRunner
 
 from stl_lfd.cli import app
-from stl_lfd.hsmm import learn_from_folder, load_model, retrieve
+from stl_lfd.hsmm import load_model, retrieve
 from stl_lfd.signals import read_signal_csv
 from stl_lfd.stl import compile_spec, load_spec, parse
 from tests.conftest import ROOT
@@ -17,9 +17,9 @@ DEMOS = ROOT / "demos" / "three_regions"
 runner = CliRunner()
 
 
-@pytest.fixture(scope="module")
-def learned():
-    return learn_from_folder(DEMOS, 6)
+@pytest.fixture
+def learned(learned_skill):
+    return learned_skill
 
 
 @pytest.mark.slow
