@@ -29,13 +29,13 @@ class TrialPrinter:
             self.console.print(plan + f"; the run is complete ({done} trials; raise --iterations to extend it)")
             return
         self.console.print(plan + (f"; resuming after trial {done}" if done else ""))
-        self.console.print(f"[dim]{'trial':>7} {'phase':>6} {'robustness':>11} {'best':>11} {'satisfied':>9} {'time':>7}[/]")
+        self.console.print(f"[dim]{'trial':>7} {'phase':>7} {'robustness':>11} {'best':>11} {'satisfied':>9} {'time':>7}[/]")
 
     def trial(self, trial: Trial, best: Trial | None) -> None:
         value = f"{trial.robustness:+.5f}" if trial.robustness is not None else "failed"
         best_value = f"{best.robustness:+.5f}" if best is not None else "-"
         mark = f"{'[green]yes[/]' if trial.satisfied else 'no':>{9 + (len('[green][/]') if trial.satisfied else 0)}}"
-        line = f"{trial.trial:>3}/{self.budget:<3} {trial.phase:>6} {value:>11} {best_value:>11} {mark} {trial.wall_seconds:6.2f}s"
+        line = f"{trial.trial:>3}/{self.budget:<3} {trial.phase:>7} {value:>11} {best_value:>11} {mark} {trial.wall_seconds:6.2f}s"
         if trial.error:
             line += f"  [red]{trial.error}[/]"
         self.console.print(line)
