@@ -25,8 +25,9 @@ from tests.conftest import ROOT
 
 NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?:\.\.\.)?")
 DURATION_AFTER = re.compile(r"^ ?(s\b|x real time)")
-SLOW_COMMANDS = ("stlopt optimize", "stlopt replay", "stlopt sweep")  # write nothing a later example reads
-HEAVY_COMMANDS = ("stlopt learn", "stlopt retrieve", "stlopt rollout", "stlopt ask", "stlopt tell", "python ")  # seconds each
+STANDALONE_COMMANDS = ("stlopt optimize", "stlopt replay", "stlopt sweep")  # write nothing a later example reads
+# Examples that learn, execute or start Python take seconds each: marked slow (left out by `-m "not slow"`).
+SLOW_COMMANDS = STANDALONE_COMMANDS + ("stlopt learn", "stlopt retrieve", "stlopt rollout", "stlopt ask", "stlopt tell", "python ")
 
 
 @dataclass
@@ -121,24 +122,24 @@ def scratch(tmp_path_factory) -> Path:
 
 
 def _is_slow(example: Example) -> bool:
-    return example.command.startswith(SLOW_COMMANDS)
+    return any(command in example.command for command in SLOW_COMMANDS)
 
 
-def _is_marked_slow(example: Example) -> bool:
-    """Slow examples, and those that learn, execute or start Python (left out by `-m "not slow"`)."""
-    return _is_slow(example) or any(command in example.command for command in HEAVY_COMMANDS)
+def _needs(index: int, earlier: int) -> bool:
+    """Whether example `index` runs after example `earlier`: examples use the files earlier ones
+    wrote, except those of the standalone ones (a full optimisation, a filmed replay and a
+    sweep); a fast example needs only the fast ones before it."""
+    before = EXAMPLES[earlier]
+    return not before.command.startswith(STANDALONE_COMMANDS) and (_is_slow(EXAMPLES[index]) or not _is_slow(before))
 
 
 _done: dict[int, subprocess.CompletedProcess] = {}
 
 
 def _run_up_to(index: int, folder: Path) -> subprocess.CompletedProcess:
-    """Run example `index` after every earlier one that is not slow (examples use the files
-    earlier ones wrote; the slow ones, a full optimisation, a filmed replay and a sweep, write nothing
-    a later example reads). A light example needs only the light ones before it."""
+    """Run example `index` after the earlier ones it needs (`_needs`)."""
     for earlier in range(index + 1):
-        needed = not _is_slow(EXAMPLES[earlier]) and (_is_marked_slow(EXAMPLES[index]) or not _is_marked_slow(EXAMPLES[earlier]))
-        if earlier not in _done and (earlier == index or needed):
+        if earlier not in _done and (earlier == index or _needs(index, earlier)):
             environment = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}", COLUMNS="200")
             _done[earlier] = subprocess.run(
                 ["bash", "-o", "pipefail", "-c", EXAMPLES[earlier].command], cwd=folder, env=environment, capture_output=True, text=True, timeout=900
@@ -148,7 +149,7 @@ def _run_up_to(index: int, folder: Path) -> subprocess.CompletedProcess:
 
 @pytest.mark.parametrize(
     "index",
-    [pytest.param(index, marks=[pytest.mark.slow] if _is_marked_slow(example) else [], id=f"line{example.line}") for index, example in enumerate(EXAMPLES)],
+    [pytest.param(index, marks=[pytest.mark.slow] if _is_slow(example) else [], id=f"line{example.line}") for index, example in enumerate(EXAMPLES)],
 )
 def test_readme_console_example(index, scratch):
     example = EXAMPLES[index]

@@ -99,7 +99,7 @@ def next_points(
         return [(random_point(bounds, optimizer.seed, trial), "random") for trial in range(index, end)]
     observed = batch_of(start - 1, optimizer)[0] if optimizer.workers > 1 else start
     before = history[:observed]
-    pending = np.array([trial.x for trial in history[observed:start]] + list(running)[: max(start - len(history), 0)])
+    pending = np.array([trial.x for trial in history[observed:start]] + list(running)[: max(start - len(history), 0)]).reshape(-1, bounds.shape[1])
     X, Y = observations(before)
     if len(Y) == 0 or np.ptp(Y) == 0:  # every trial so far failed, or all gave the same value: nothing to model yet
         return [(random_point(bounds, optimizer.seed, trial), "random") for trial in range(index, end)]
@@ -107,7 +107,7 @@ def next_points(
         batch: list[tuple[np.ndarray, str]] = []
         if stalled(before, Y):
             batch.append((sobol_points(bounds, start + 1, optimizer.seed)[start], "explore"))
-            pending = np.vstack([pending.reshape(-1, bounds.shape[1]), batch[0][0]])
+            pending = np.vstack([pending, batch[0][0]])
         if end - start > len(batch):
             points = _composite_points(before, X, Y, bounds, optimizer, parts, end - start - len(batch), pending)
             batch += [(point, "stl") for point in points]
@@ -127,8 +127,9 @@ def stalled(history: list[Trial], Y: np.ndarray) -> bool:
     away from the satisfying region; space-filling trials in between find it."""
     if np.max(Y) > 0 or len(history) <= STALL_TRIALS:
         return False
+    best_before = np.maximum.accumulate(Y)[:-1]  # entry i - 1: the best before trial index i
     recent = range(len(history) - STALL_TRIALS, len(history))
-    return all(history[i].phase == "stl" and Y[i] <= np.max(Y[:i]) + STALL_GAIN * abs(np.max(Y[:i])) for i in recent)
+    return all(history[i].phase == "stl" and Y[i] <= best_before[i - 1] + STALL_GAIN * abs(best_before[i - 1]) for i in recent)
 
 
 def batch_of(index: int, optimizer: Optimizer) -> tuple[int, int]:

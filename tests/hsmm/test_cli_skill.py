@@ -17,11 +17,6 @@ DEMOS = ROOT / "demos" / "three_regions"
 runner = CliRunner()
 
 
-@pytest.fixture
-def learned(learned_skill):
-    return learned_skill
-
-
 @pytest.mark.slow
 def test_learn_writes_a_model_and_a_summary(tmp_path: Path):
     result = runner.invoke(app, ["learn", str(DEMOS), "-K", "6", "-o", str(tmp_path / "m.npz"), "--plot", str(tmp_path / "s.png")])
@@ -34,7 +29,7 @@ def test_learn_writes_a_model_and_a_summary(tmp_path: Path):
 
 
 @pytest.mark.slow
-def test_retrieve_writes_a_signal_csv(tmp_path: Path, learned):
+def test_retrieve_writes_a_signal_csv(tmp_path: Path):
     model_path = tmp_path / "m.npz"
     runner.invoke(app, ["learn", str(DEMOS), "-o", str(model_path)])
     result = runner.invoke(app, ["retrieve", str(model_path), "--rate", "240", "--duration", "20"])
@@ -46,8 +41,8 @@ def test_retrieve_writes_a_signal_csv(tmp_path: Path, learned):
     assert set(np.unique(table.columns["state"])) <= set(range(1, 7))
 
 
-def test_retrieval_stays_in_the_demonstrations_tube(learned):
-    model, sequences = learned
+def test_retrieval_stays_in_the_demonstrations_tube(learned_skill):
+    model, sequences = learned_skill
     trajectory = retrieve(model)
     distance, _ = cKDTree(np.concatenate(sequences)).query(trajectory.positions)
     assert distance.max() < 0.020  # 20 mm from the nearest demonstrated point (the tracker smooths corners)
@@ -56,8 +51,8 @@ def test_retrieval_stays_in_the_demonstrations_tube(learned):
     assert min(durations) - 1.0 <= trajectory.times[-1] <= max(durations) + 1.0
 
 
-def test_learned_skill_visits_the_regions_but_violates_phi1_and_phi2(learned):
-    model, _ = learned
+def test_learned_skill_visits_the_regions_but_violates_phi1_and_phi2(learned_model):
+    model = learned_model
     trajectory = retrieve(model, duration=22, rate=240)
     signals = dict(zip("xyz", trajectory.positions.T))
     regions = (ROOT / "specs" / "regions.stl").read_text()

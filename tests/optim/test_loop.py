@@ -80,10 +80,17 @@ def test_a_failing_trial_is_recorded_and_the_loop_goes_on():
     assert all(trial.status == "ok" for index, trial in enumerate(history) if index not in (1, 5))
 
 
-def test_stl_explores_with_the_sobol_sequence_while_it_stalls_on_a_violated_spec():
-    def hopeless(x):  # violated everywhere, with gains far below the distance to satisfaction
-        return Outcome(-1.0 - 1e-3 * float(x[0]))
+def hopeless(x):  # violated everywhere, with gains far below the distance to satisfaction
+    return Outcome(-1.0 - 1e-3 * float(x[0]))
 
+
+def stalls(*trials: tuple[str, float]) -> bool:
+    """`stalled` on a history of (phase, robustness) trials."""
+    history = [Trial(number, phase, np.zeros(3), value) for number, (phase, value) in enumerate(trials, start=1)]
+    return stalled(history, np.array([value for _, value in trials]))
+
+
+def test_stl_explores_with_the_sobol_sequence_while_it_stalls_on_a_violated_spec():
     history = run(Optimizer("stl", initial=3, trials=9, seed=2), function=hopeless)
     assert [trial.phase for trial in history] == ["sobol"] * 3 + ["stl", "stl", "explore"] * 2
     sobol = sobol_points(BOUNDS, 9, 2)
@@ -93,18 +100,16 @@ def test_stl_explores_with_the_sobol_sequence_while_it_stalls_on_a_violated_spec
 def test_stl_does_not_explore_once_the_spec_is_satisfied_or_while_the_model_gains():
     history = run(Optimizer("stl", initial=3, trials=6, seed=2), function=lambda x: Outcome(1.0 - 1e-3 * float(x[0])))
     assert [trial.phase for trial in history][3:] == ["stl"] * 3
-    trial = lambda number, phase, value: Trial(number, phase, np.zeros(3), value)  # noqa: E731
-    values = [-1.0, -0.8, -0.78, -0.75]  # after the design, gains of 2.5 % and 4 % of the distance
-    history = [trial(1, "sobol", -1.0), trial(2, "sobol", -0.8), trial(3, "stl", -0.78), trial(4, "stl", -0.75)]
-    assert stalled(history, np.array(values))
-    assert not stalled(history[:3], np.array(values[:3]))  # one stalled trial is not a stall
-    assert not stalled(history[:3] + [trial(4, "stl", -0.7)], np.array(values[:3] + [-0.7]))  # gained 10.3 %
-    assert not stalled(history[:3] + [trial(4, "explore", -0.9)], np.array(values[:3] + [-0.9]))
-    assert not stalled(history[:3] + [trial(4, "stl", 0.1)], np.array(values[:3] + [0.1]))
+    design = [("sobol", -1.0), ("sobol", -0.8)]
+    assert stalls(*design, ("stl", -0.78), ("stl", -0.75))  # gains of 2.5 % and 4 % of the distance
+    assert not stalls(*design, ("stl", -0.78))  # one stalled trial is not a stall
+    assert not stalls(*design, ("stl", -0.78), ("stl", -0.7))  # gained 10.3 %
+    assert not stalls(*design, ("stl", -0.78), ("explore", -0.9))
+    assert not stalls(*design, ("stl", -0.78), ("stl", 0.1))
 
 
 def test_a_stalled_batch_of_parallel_trials_starts_with_the_exploring_trial():
-    history = run(Optimizer("stl", initial=2, trials=12, seed=1, workers=2), function=lambda x: Outcome(-1.0 - 1e-3 * float(x[0])))
+    history = run(Optimizer("stl", initial=2, trials=12, seed=1, workers=2), function=hopeless)
     phases = [trial.phase for trial in history]
     assert phases[:2] == ["sobol"] * 2 and "explore" in phases
     for number, phase in enumerate(phases):
