@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 import stl_lfd
 from stl_lfd.cli import app
-from stl_lfd.errors import ConfigError, ModelError
+from stl_lfd.errors import ConfigError, ModelError, RunError
 from tests.conftest import ROOT
 from tests.optim.test_run import small_task
 
@@ -72,6 +72,29 @@ def test_optimize_from_objects_reproduces_the_command_lines_trials(tmp_path, lea
     assert all(np.array_equal(trial.x, line["x"]) for trial, line in zip(result.history, recorded))
     assert result.best_robustness == max(line["robustness"] for line in recorded)
     assert result.best_model.n_states == learned_model.n_states
+
+
+@pytest.mark.slow
+def test_optimize_with_a_run_directory_records_a_run_the_command_line_continues(tmp_path, learned_model, learned_model_file):
+    task = small_task(tmp_path, learned_model_file)
+    assert CliRunner().invoke(app, ["optimize", str(task), "--out", str(tmp_path / "cli"), "-N", "6"]).exit_code == 0
+    run = tmp_path / "python"
+    settings = dict(duration=22, rate=50, backend="kinematic", out=run)
+    parameters = stl_lfd.Parameters(means=stl_lfd.MeanParameters(components=(2, 3)), durations=stl_lfd.DurationParameters(components="all"))
+    result = stl_lfd.optimize(learned_model, ROOT / "specs" / "phi1.stl", parameters, stl_lfd.Optimizer(initial=3, trials=5, seed=2), **settings)
+    assert stl_lfd.Spec.load(run / "spec.stl").tree == stl_lfd.Spec.load(ROOT / "specs" / "phi1.stl").tree
+    on_disk = [json.loads(line)["robustness"] for line in (run / "trials.jsonl").read_text().splitlines()]
+    assert on_disk == [trial.robustness for trial in result.history]
+    assert sorted(result.signals) == [0, 1, 2, 3, 4, 5] and (run / "signals" / "trial-0005.csv").is_file()
+    # The command line continues the Python run to 6 trials, as it continues its own.
+    resumed = CliRunner().invoke(app, ["optimize", str(run / "task.yaml"), "--out", str(run), "--resume", "-N", "6"])
+    assert resumed.exit_code == 0, resumed.output
+    cli = [json.loads(line) for line in (tmp_path / "cli" / "trials.jsonl").read_text().splitlines()]
+    python = [json.loads(line) for line in (run / "trials.jsonl").read_text().splitlines()]
+    assert [line["robustness"] for line in python] == [line["robustness"] for line in cli]
+    assert json.loads((run / "summary.json").read_text())["trials"] == 6
+    with pytest.raises(RunError, match="exists"):
+        stl_lfd.optimize(learned_model, ROOT / "specs" / "phi1.stl", parameters, **settings)
 
 
 def test_settings_are_checked_when_objects_are_made():

@@ -7,13 +7,14 @@
     result.best_robustness, result.best_model
 
 The same seed gives the same trials as `stlopt optimize` on a task file with the same settings.
-To record a run directory (resumable, for `stlopt report`), use a task file with
-`stlopt optimize`, or `start_run` and `optimise` from `stl_lfd.optim`.
+With `out=`, the run is also recorded in a run directory, as `stlopt optimize` records it: the
+spec (`spec.stl`) and the unoptimised skill are written into it, so that `stlopt report OUT`
+reads it and `stlopt optimize OUT/task.yaml --out OUT --resume -N MORE` continues it.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
@@ -21,13 +22,17 @@ from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM
 from stl_lfd.limits import samples_problem
 from stl_lfd.optim.loop import Trial, best_trial
-from stl_lfd.optim.run import PreparedRun, optimise, prepare_objective
+from stl_lfd.optim.resume import inputs_record
+from stl_lfd.optim.run import PreparedRun, optimise, prepare_objective, start_run
+from stl_lfd.optim.rundir import MODEL_FILE, TASK_FILE, RunDirectory
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import SINGLE_SKILL, Optimizer, Parameters, Task
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim import Command
-from stl_lfd.stl import Spec
+from stl_lfd.stl import Spec, format_spec
+
+SPEC_FILE = "spec.stl"  # the spec of a run started from Python, written into its directory
 
 
 @dataclass
@@ -74,29 +79,42 @@ class Result:
 
 
 class MemoryRun:
-    """The recording side of a run, kept in memory (what `RunDirectory` writes to disk)."""
+    """The recording side of a run, kept in memory, and also on disk when given the
+    `RunDirectory` that records it."""
 
-    def __init__(self, initial_signals: SignalTable) -> None:
+    def __init__(self, initial_signals: SignalTable, disk: RunDirectory | None = None) -> None:
         self.signals: dict[int, SignalTable] = {0: initial_signals}
         self.trials: list[Trial] = []
         self.best_models: dict[str, HSMM] | None = None
+        self.disk = disk
+
+    @property
+    def path(self) -> Path | None:
+        return None if self.disk is None else self.disk.path
 
     def append_trial(self, trial: Trial, signals: SignalTable | None) -> None:
         self.trials.append(trial)
         if signals is not None:
             self.signals[trial.trial] = signals
+        if self.disk is not None:
+            self.disk.append_trial(trial, signals)
 
     def write_best_models(self, models: dict[str, HSMM]) -> None:
         self.best_models = models
+        if self.disk is not None:
+            self.disk.write_best_models(models)
 
     def has_best_models(self) -> bool:
         return self.best_models is not None
 
     def write_summary(self, summary: Summary) -> None:
-        """Nothing to keep: `optimise` returns the final summary."""
+        """On disk only: `optimise` returns the final summary."""
+        if self.disk is not None:
+            self.disk.write_summary(summary)
 
     def close(self) -> None:
-        pass
+        if self.disk is not None:
+            self.disk.close()
 
 
 def optimize(
@@ -115,6 +133,7 @@ def optimize(
     command: Command | None = None,
     placements: Sequence[Mapping[str, Pose]] = (),
     on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None,
+    out: str | Path | None = None,
 ) -> Result:
     """Adapt `models` so that their execution satisfies `spec`, as robustly as possible.
 
@@ -130,6 +149,7 @@ def optimize(
         placements: where the scene's object frames stand (frame name -> `Pose`); several
             make every trial execute once per placement and score the worst.
         on_trial: called after each trial with it and the best trial so far.
+        out: a new run directory to record the run in as well (default: memory only).
 
     Returns:
         the best models and robustness, the history of trials and the summary.
@@ -146,8 +166,23 @@ def optimize(
         parameters=parameters, optimizer=optimizer or Optimizer(), source=Path("<python>"), command=command,
         placements=tuple(dict(placement) for placement in placements),
     )  # fmt: skip
-    space, objective, initial, summary = prepare_objective(task, models, spec.tree)
-    record = MemoryRun(initial.payload)
-    with PreparedRun(task, record, models, space, objective, [], summary) as prepared:
+    if out is None:
+        space, objective, initial, summary = prepare_objective(task, models, spec.tree)
+        prepared = PreparedRun(task, MemoryRun(initial.payload), models, space, objective, [], summary)
+    else:
+        prepared = _start_recorded_run(task, models, spec, Path(out))
+    with prepared:
         summary = optimise(prepared, on_trial)
+    record = prepared.run
     return Result(record.best_models or models, record.trials, summary, record.signals)
+
+
+def _start_recorded_run(task: Task, models: dict[str, HSMM], spec: Spec, out: Path) -> PreparedRun:
+    """`start_run` for a task built from objects: its spec and models are written into `out`,
+    and its task file is `out/task.yaml`, so that the run reads like one of `stlopt optimize`."""
+    folder = out.resolve()
+    task = replace(task, name=folder.name, spec=folder / SPEC_FILE, model=folder / MODEL_FILE if task.behaviour is None else None, source=folder / TASK_FILE)
+    inputs = inputs_record(task, {}, task, spec.tree)
+    prepared = start_run(task, out, inputs=inputs, models=models, spec=spec.tree, files={SPEC_FILE: format_spec(spec.tree)})
+    prepared.run = MemoryRun(prepared.initial_signals, disk=prepared.run)
+    return prepared

@@ -12,10 +12,13 @@ from __future__ import annotations
 
 import hashlib
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from stl_lfd.errors import RunError
 from stl_lfd.optim.task import Task, placements_to_yaml
+
+if TYPE_CHECKING:
+    from stl_lfd.stl import ast
 
 # Command-line overrides, by their `Task.with_overrides` name, as the CLI spells them.
 OPTIONS = {
@@ -26,24 +29,26 @@ OPTIONS = {
 MAY_CHANGE = ("name",)
 
 
-def inputs_record(file_task: Task, overrides: dict[str, Any], task: Task) -> dict[str, Any]:
-    """What `inputs.json` holds for a run of `task`, which is `file_task` with `overrides`."""
+def inputs_record(file_task: Task, overrides: dict[str, Any], task: Task, spec: ast.Spec | None = None) -> dict[str, Any]:
+    """What `inputs.json` holds for a run of `task`, which is `file_task` with `overrides`
+    (`spec`: the parsed spec, when its file is not written yet)."""
     return {
         "task_file": str(file_task.source.resolve()),
         "task": _comparable(file_task),
         "overrides": {key: _plain(value) for key, value in overrides.items() if value is not None and key != "trials"},
-        "fingerprint": fingerprint(task),
+        "fingerprint": fingerprint(task, spec),
     }
 
 
-def fingerprint(task: Task) -> dict[str, str]:
+def fingerprint(task: Task, spec: ast.Spec | None = None) -> dict[str, str]:
     """A digest of each input a run reads from outside its directory, by what it means (the
     parsed spec with its includes, the parsed behaviour and scene), so that editing a comment
-    is not a change."""
+    is not a change. `spec`: the parsed spec instead of reading `task.spec`."""
     from stl_lfd.sim import load_scene
     from stl_lfd.stl import format_spec, load_spec
 
-    digests = {"spec": _digest(format_spec(load_spec(task.spec))), "scene": _digest(repr(load_scene(task.scene)))}
+    spec = load_spec(task.spec) if spec is None else spec
+    digests = {"spec": _digest(format_spec(spec)), "scene": _digest(repr(load_scene(task.scene)))}
     if task.behaviour is not None:
         from stl_lfd.skill.behaviour import load_behaviour
 

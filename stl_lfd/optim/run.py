@@ -6,11 +6,12 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
 from stl_lfd.errors import ConfigError, ExecutionError, RunError, SignalError, SpecError
+from stl_lfd.files import write_atomically
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
 from stl_lfd.optim.loop import Outcome, Trial, best_trial, run_trials
 from stl_lfd.optim.resume import check_resume, inputs_record
@@ -107,6 +108,7 @@ class PreparedRun:
     objective: SkillObjective
     history: list[Trial]
     summary: Summary
+    initial_signals: SignalTable | None = None  # when the run started in this process
 
     def close(self) -> None:
         """Release the run directory's write lock and the simulator (ending the process does too)."""
@@ -181,17 +183,32 @@ def prepare_objective(task: Task, models: dict[str, HSMM], spec: ast.Spec | None
     return space, objective, initial, summary
 
 
-def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lambda message: None, inputs: dict[str, Any] | None = None) -> PreparedRun:
+def start_run(
+    task: Task,
+    out: Path,
+    learn_progress: Callable[[str], None] = lambda message: None,
+    inputs: dict[str, Any] | None = None,
+    models: dict[str, HSMM] | None = None,
+    spec: ast.Spec | None = None,
+    files: Mapping[str, str] | None = None,
+) -> PreparedRun:
     """Check `out`, learn or load the model, check the spec, execute the unoptimised skill, then
     create the run directory with all of that in it. `inputs` is the record of the task file and
-    command-line overrides (`resume.inputs_record`; default: `task` as its own file)."""
+    command-line overrides (`resume.inputs_record`; default: `task` as its own file).
+
+    From Python objects: `models` instead of the task's, `spec` instead of reading `task.spec`,
+    and `files` (name -> text) written into the run directory with the rest, for task paths
+    that point into it."""
     check_new_run_path(Path(out))
-    if task.model is None:
-        learn_progress(f"learning the skills of {task.source.name}")
-    models = task_models(task)
-    space, objective = objective_for(task, models)
+    if models is None:
+        if task.model is None:
+            learn_progress(f"learning the skills of {task.source.name}")
+        models = task_models(task)
+    space, objective = objective_for(task, models, spec)
     try:
         with StagedRun(out) as staged:
+            for name, text in (files or {}).items():
+                write_atomically(staged.path / name, text)
             objective.exchange_in(staged.path)  # the unoptimised skill's execution is part of the new run
             start = time.perf_counter()
             initial = objective.evaluate(models, trial=0)
@@ -201,7 +218,7 @@ def start_run(task: Task, out: Path, learn_progress: Callable[[str], None] = lam
     except BaseException:
         objective.close()
         raise
-    return PreparedRun(task, run, models, space, objective, [], summary)
+    return PreparedRun(task, run, models, space, objective, [], summary, initial.payload)
 
 
 def resume_run(out: Path, trials: int | None = None, file_task: Task | None = None, given: dict[str, Any] | None = None) -> PreparedRun:
