@@ -91,20 +91,38 @@ def _one_thread() -> None:
 
 def _with_learned_model(task, problem: str):
     """The task with its demonstrations learned once (into `results/models/`) and loaded by
-    every run after that: learning is deterministic, so only time is saved."""
+    every run after that: learning is deterministic, so only time is saved. The file is named
+    by a digest of the demonstrations, the number of states and the skill model's code, so a
+    change to any of them learns again instead of loading a model the tool would not learn."""
     from dataclasses import replace
 
     from stl_lfd.hsmm import learn_from_folder, save_model
 
     if task.demos is None:
         return task
-    path = RESULTS.parent / "models" / f"{problem}.npz"
+    path = RESULTS.parent / "models" / f"{problem}-{_learning_digest(task.demos, task.states)}.npz"
     if not path.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
         partial = path.with_suffix(f".{multiprocessing.current_process().pid}.npz")
         save_model(learn_from_folder(task.demos, task.states)[0], partial)
         partial.replace(path)
     return replace(task, model=path, demos=None)
+
+
+def _learning_digest(demos: Path, states: int) -> str:
+    """A digest of what learning reads: the demonstration files, `states`, and the source of
+    `stl_lfd.hsmm` and of the CSV reader."""
+    import hashlib
+
+    import stl_lfd.hsmm
+
+    digest = hashlib.sha256(str(states).encode())
+    package = Path(stl_lfd.hsmm.__file__).parent
+    sources = sorted(package.glob("*.py")) + [package.parent / "signals.py"]
+    for path in sorted(Path(demos).iterdir()) + sources:
+        if path.is_file():
+            digest.update(path.name.encode() + path.read_bytes())
+    return digest.hexdigest()[:12]
 
 
 def _run_tool(task) -> tuple[list[dict], float]:
