@@ -236,9 +236,9 @@ def run_suite(problems: list[str], methods: list[str], seeds: list[int], jobs: i
 
 
 def summarise(problems: list[str], methods: list[str], seeds: list[int] | None = None) -> list[dict]:
-    """One row per (problem, method) of the recorded runs, then one `all` row per method. Only
-    the (problem, seed) pairs that every method has finished count, so methods are compared on
-    the same seeds."""
+    """One row per (problem, method) of the recorded runs, then one `all` row per method over
+    the problems with a solution shown (a satisfying point in their search). Only the (problem,
+    seed) pairs that every method has finished count, so methods are compared on the same seeds."""
     records = [r for r in _recorded(RESULTS) if r["problem"] in problems and r["method"] in methods and (seeds is None or r["seed"] in seeds)]
     finished: dict[tuple[str, int], set[str]] = {}
     for r in records:
@@ -253,8 +253,9 @@ def summarise(problems: list[str], methods: list[str], seeds: list[int] | None =
             if not runs:
                 continue
             firsts = [r["first_satisfied"] for r in runs if r["first_satisfied"] is not None]
-            totals[method][0] += len(firsts)
-            totals[method][1] += len(runs)
+            if search and search["best_robustness"] > 0:
+                totals[method][0] += len(firsts)
+                totals[method][1] += len(runs)
             rows.append(
                 {
                     "problem": problem,
@@ -275,6 +276,26 @@ def summarise(problems: list[str], methods: list[str], seeds: list[int] | None =
     return rows
 
 
+def paired_firsts(problems: list[str], methods: list[str], seeds: list[int] | None = None, reference: str = "stl") -> list[dict]:
+    """Median trials to first satisfaction of `reference` and of each other method, over the
+    (problem, seed) pairs that both satisfy."""
+    records = {(r["problem"], r["method"], r["seed"]): r for r in _recorded(RESULTS) if seeds is None or r["seed"] in seeds}
+    rows = []
+    for method in methods:
+        if method == reference:
+            continue
+        pairs = [
+            (ours["first_satisfied"], theirs["first_satisfied"])
+            for (problem, name, seed), ours in records.items()
+            if name == reference and problem in problems and (theirs := records.get((problem, method, seed))) is not None
+            if ours["first_satisfied"] is not None and theirs["first_satisfied"] is not None
+        ]
+        if pairs:
+            ours, theirs = zip(*pairs)
+            rows.append({"against": method, "pairs": len(pairs), reference: statistics.median(ours), method: statistics.median(theirs)})
+    return rows
+
+
 COLUMNS = ("problem", "budget", "search best", "method", "seeds", "satisfied", "median first", "median best", "optimiser s/trial", "rollout s/trial")
 
 
@@ -285,6 +306,9 @@ def print_table(problems: list[str], methods: list[str], seeds: list[int] | None
         print("|" + "---|" * len(COLUMNS))
         for row in rows:
             print("| " + " | ".join(row.get(column, "") for column in COLUMNS) + " |")
+        print("\nMedian first satisfied trial on the pairs both satisfy:\n")
+        for row in paired_firsts(problems, methods, seeds):
+            print(f"- stl against {row['against']}: {row['pairs']} pairs, stl {row['stl']:g}, {row['against']} {row[row['against']]:g}")
         return
     table = Table(title="Optimiser suite: success within the budget, over seeds")
     for column in COLUMNS:
