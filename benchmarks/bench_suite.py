@@ -292,7 +292,7 @@ def paired_firsts(problems: list[str], methods: list[str], seeds: list[int] | No
         ]
         if pairs:
             ours, theirs = zip(*pairs)
-            rows.append({"against": method, "pairs": len(pairs), reference: statistics.median(ours), method: statistics.median(theirs)})
+            rows.append({"reference": reference, "against": method, "pairs": len(pairs), reference: statistics.median(ours), method: statistics.median(theirs)})
     return rows
 
 
@@ -308,7 +308,8 @@ def print_table(problems: list[str], methods: list[str], seeds: list[int] | None
             print("| " + " | ".join(row.get(column, "") for column in COLUMNS) + " |")
         print("\nMedian first satisfied trial on the pairs both satisfy:\n")
         for row in paired_firsts(problems, methods, seeds):
-            print(f"- stl against {row['against']}: {row['pairs']} pairs, stl {row['stl']:g}, {row['against']} {row[row['against']]:g}")
+            ours, theirs = row["reference"], row["against"]
+            print(f"- {ours} against {theirs}: {row['pairs']} pairs, {ours} {row[ours]:g}, {theirs} {row[theirs]:g}")
         return
     table = Table(title="Optimiser suite: success within the budget, over seeds")
     for column in COLUMNS:

@@ -22,7 +22,6 @@ from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM
 from stl_lfd.limits import samples_problem
 from stl_lfd.optim.loop import Trial, best_trial
-from stl_lfd.optim.resume import inputs_record
 from stl_lfd.optim.run import PreparedRun, optimise, prepare_objective, start_run
 from stl_lfd.optim.rundir import MODEL_FILE, TASK_FILE, RunDirectory
 from stl_lfd.optim.summary import Summary
@@ -79,42 +78,52 @@ class Result:
 
 
 class MemoryRun:
-    """The recording side of a run, kept in memory, and also on disk when given the
-    `RunDirectory` that records it."""
+    """The recording side of a run, kept in memory (what `RunDirectory` writes to disk)."""
 
-    def __init__(self, initial_signals: SignalTable, disk: RunDirectory | None = None) -> None:
+    def __init__(self, initial_signals: SignalTable) -> None:
         self.signals: dict[int, SignalTable] = {0: initial_signals}
         self.trials: list[Trial] = []
         self.best_models: dict[str, HSMM] | None = None
-        self.disk = disk
-
-    @property
-    def path(self) -> Path | None:
-        return None if self.disk is None else self.disk.path
 
     def append_trial(self, trial: Trial, signals: SignalTable | None) -> None:
         self.trials.append(trial)
         if signals is not None:
             self.signals[trial.trial] = signals
-        if self.disk is not None:
-            self.disk.append_trial(trial, signals)
 
     def write_best_models(self, models: dict[str, HSMM]) -> None:
         self.best_models = models
-        if self.disk is not None:
-            self.disk.write_best_models(models)
 
     def has_best_models(self) -> bool:
         return self.best_models is not None
 
     def write_summary(self, summary: Summary) -> None:
-        """On disk only: `optimise` returns the final summary."""
-        if self.disk is not None:
-            self.disk.write_summary(summary)
+        """Nothing to keep: `optimise` returns the final summary."""
 
     def close(self) -> None:
-        if self.disk is not None:
-            self.disk.close()
+        pass
+
+
+class RecordedRun(MemoryRun):
+    """A run kept in memory and recorded in its `RunDirectory` as well."""
+
+    def __init__(self, initial_signals: SignalTable, disk: RunDirectory) -> None:
+        super().__init__(initial_signals)
+        self.disk = disk
+        self.path = disk.path
+
+    def append_trial(self, trial: Trial, signals: SignalTable | None) -> None:
+        super().append_trial(trial, signals)
+        self.disk.append_trial(trial, signals)
+
+    def write_best_models(self, models: dict[str, HSMM]) -> None:
+        super().write_best_models(models)
+        self.disk.write_best_models(models)
+
+    def write_summary(self, summary: Summary) -> None:
+        self.disk.write_summary(summary)
+
+    def close(self) -> None:
+        self.disk.close()
 
 
 def optimize(
@@ -182,7 +191,6 @@ def _start_recorded_run(task: Task, models: dict[str, HSMM], spec: Spec, out: Pa
     and its task file is `out/task.yaml`, so that the run reads like one of `stlopt optimize`."""
     folder = out.resolve()
     task = replace(task, name=folder.name, spec=folder / SPEC_FILE, model=folder / MODEL_FILE if task.behaviour is None else None, source=folder / TASK_FILE)
-    inputs = inputs_record(task, {}, task, spec.tree)
-    prepared = start_run(task, out, inputs=inputs, models=models, spec=spec.tree, files={SPEC_FILE: format_spec(spec.tree)})
-    prepared.run = MemoryRun(prepared.initial_signals, disk=prepared.run)
+    prepared = start_run(task, out, models=models, spec=spec.tree, files={SPEC_FILE: format_spec(spec.tree)})
+    prepared.run = RecordedRun(prepared.initial_signals, prepared.run)
     return prepared

@@ -213,7 +213,7 @@ def start_run(
             start = time.perf_counter()
             initial = objective.evaluate(models, trial=0)
             summary = Summary.of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
-            run = staged.commit(task, models, initial.payload, summary, inputs if inputs is not None else inputs_record(task, {}, task))
+            run = staged.commit(task, models, initial.payload, summary, inputs if inputs is not None else inputs_record(task, {}, task, spec))
         objective.exchange_in(run.path)
     except BaseException:
         objective.close()
