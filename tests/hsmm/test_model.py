@@ -8,6 +8,7 @@ import pytest
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm import HSMM, load_model, lqt, retrieve, save_model
 from stl_lfd.hsmm._forward import duration_pmf, state_occupancy
+from stl_lfd.hsmm.retrieval import hermite_interpolation
 
 PERIOD = 0.01
 
@@ -181,6 +182,20 @@ def test_retrieval_follows_modified_parameters():
     assert abs(first_switch - round(1.2 / PERIOD)) <= 1  # argmax of a spread-out duration
     in_second_state = moved.positions[moved.states == 1]
     assert np.min(np.linalg.norm(in_second_state - model.means_[1], axis=1)) < 0.01
+
+
+@pytest.mark.parametrize("spacing", ["even", "uneven"])
+def test_hermite_interpolation_is_scipys_cubic_hermite_spline_bit_for_bit(spacing):
+    from scipy.interpolate import CubicHermiteSpline
+
+    rng = np.random.default_rng(3)
+    times = np.arange(200) * 0.04 if spacing == "even" else np.cumsum(rng.random(200) + 0.01)
+    positions, velocities = rng.normal(size=(200, 3)), rng.normal(size=(200, 3))
+    new_times = np.concatenate([[times[0] - 0.5], np.arange(int(times[-1] * 240) + 1) / 240, [times[-1], times[-1] + 0.3]])
+    spline = CubicHermiteSpline(times, positions, velocities, axis=0)
+    new_positions, new_velocities = hermite_interpolation(times, positions, velocities, new_times)
+    np.testing.assert_array_equal(new_positions, spline(new_times))
+    np.testing.assert_array_equal(new_velocities, spline(new_times, 1))
 
 
 def test_save_load_round_trip(tmp_path: Path):
