@@ -8,6 +8,7 @@ import pytest
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm import HSMM, load_model, lqt, retrieve, save_model
 from stl_lfd.hsmm._forward import duration_pmf, state_occupancy
+from stl_lfd.hsmm.model import gaussian_log_density
 from stl_lfd.hsmm.retrieval import hermite_interpolation
 
 PERIOD = 0.01
@@ -196,6 +197,21 @@ def test_hermite_interpolation_is_scipys_cubic_hermite_spline_bit_for_bit(spacin
     new_positions, new_velocities = hermite_interpolation(times, positions, velocities, new_times)
     np.testing.assert_array_equal(new_positions, spline(new_times))
     np.testing.assert_array_equal(new_velocities, spline(new_times, 1))
+
+
+def test_gaussian_log_density_is_scipys_multivariate_normal_bit_for_bit():
+    from scipy.stats import multivariate_normal
+
+    rng = np.random.default_rng(4)
+    points = rng.normal(size=(3, 50, 3))
+    factor = rng.normal(size=(3, 3))
+    singular = np.outer(factor[0], factor[0]) + np.outer(factor[1], factor[1])  # rank 2
+    on_plane = points @ np.linalg.svd(singular)[0][:, :2] @ np.linalg.svd(singular)[0][:, :2].T
+    for covariance, where in [(factor @ factor.T + 0.1 * np.eye(3), points), (singular, points), (singular, on_plane)]:
+        mean = rng.normal(size=3)
+        expected = multivariate_normal(mean, covariance, allow_singular=True).logpdf(where + mean * (where is on_plane))
+        np.testing.assert_array_equal(gaussian_log_density(where + mean * (where is on_plane), mean, covariance), expected)
+    assert np.isinf(gaussian_log_density(points, mean, singular)).any() and np.isfinite(gaussian_log_density(on_plane + mean, mean, singular)).all()
 
 
 def test_save_load_round_trip(tmp_path: Path):
