@@ -125,6 +125,14 @@ def _is_slow(example: Example) -> bool:
     return any(command in example.command for command in SLOW_COMMANDS)
 
 
+def _marks(example: Example) -> list[pytest.MarkDecorator]:
+    """Slow examples are marked `slow`; the standalone ones (a whole optimisation, a filmed
+    replay, a sweep) are the longest tests of all: `heavy` too."""
+    if example.command.startswith(STANDALONE_COMMANDS):
+        return [pytest.mark.slow, pytest.mark.heavy]
+    return [pytest.mark.slow] if _is_slow(example) else []
+
+
 def _needs(index: int, earlier: int) -> bool:
     """Whether example `index` runs after example `earlier`: examples use the files earlier ones
     wrote, except those of the standalone ones (a full optimisation, a filmed replay and a
@@ -149,7 +157,7 @@ def _run_up_to(index: int, folder: Path) -> subprocess.CompletedProcess:
 
 @pytest.mark.parametrize(
     "index",
-    [pytest.param(index, marks=[pytest.mark.slow] if _is_slow(example) else [], id=f"line{example.line}") for index, example in enumerate(EXAMPLES)],
+    [pytest.param(index, marks=_marks(example), id=f"line{example.line}") for index, example in enumerate(EXAMPLES)],
 )
 def test_readme_console_example(index, scratch):
     example = EXAMPLES[index]

@@ -21,6 +21,7 @@ from typing import Any, Callable
 import numpy as np
 
 from stl_lfd.errors import ConfigError, ExecutionError, RunError, SignalError
+from stl_lfd.optim.acquisition import sobol_points
 from stl_lfd.optim.loop import Outcome, Trial, next_point
 from stl_lfd.optim.resume import check_resume
 from stl_lfd.optim.run import Recorder, SkillObjective, objective_for, prepared_from, task_models
@@ -63,12 +64,13 @@ def ask_new(task: Task, out: Path, inputs: dict[str, Any], learn_progress: Calla
     if task.model is None:
         learn_progress(f"learning the skills of {task.source.name}")
     models = task_models(task)
-    _, objective = objective_for(task, models, execute=False)
+    space, objective = objective_for(task, models, execute=False)
     reference = objective.reference(models)
     gate(reference, objective.scene)  # nothing to record a refusal in yet: an error
+    design = sobol_points(space.bounds, task.optimizer.initial, task.optimizer.seed)  # once, so that asking for them needs no torch
     with StagedRun(out) as staged:
         _write_reference(reference, staged.path, 0, objective.scene.gripper_opening)
-        run = staged.commit(task, models, None, None, inputs, Pending(0, "initial", None, 0.0, time.time()))
+        run = staged.commit(task, models, None, None, inputs, Pending(0, "initial", None, 0.0, time.time()), design)
     run.close()
     return Asked(0, _reference_path(Path(out), 0), "initial")
 
@@ -96,9 +98,12 @@ def ask(
             return Asked(pending.trial, _reference_path(run.path, pending.trial), pending.phase, again=True)
         prepared = prepared_from(run, task, execute=False)
         recorder, objective = Recorder(prepared), prepared.objective
+        design = run.initial_design()
+        if design is not None and design.shape != (task.optimizer.initial, len(prepared.space.bounds[0])):
+            design = None
         while len(recorder.history) < task.optimizer.trials:
             start = time.perf_counter()
-            x, phase = next_point(recorder.history, prepared.space.bounds, task.optimizer, objective.composition)
+            x, phase = next_point(recorder.history, prepared.space.bounds, task.optimizer, objective.composition, design)
             number = len(recorder.history) + 1
             try:
                 reference = objective.reference(prepared.space.apply(prepared.models, x))

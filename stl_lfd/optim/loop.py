@@ -71,17 +71,26 @@ class Outcome:
     components: dict[str, float] | None = None
 
 
-def next_point(history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None = None) -> tuple[np.ndarray, str]:
+def next_point(
+    history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None = None, initial_design: np.ndarray | None = None
+) -> tuple[np.ndarray, str]:
     """The point of trial `len(history) + 1` and the phase that chose it; method `stl` models
     each of `parts`, the spec's top-level conjuncts."""
-    return next_points(history, bounds, optimizer, parts)[0]
+    return next_points(history, bounds, optimizer, parts, initial_design=initial_design)[0]
 
 
 def next_points(
-    history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None = None, running: Sequence[np.ndarray] = ()
+    history: list[Trial],
+    bounds: np.ndarray,
+    optimizer: Optimizer,
+    parts: SpecParts | None = None,
+    running: Sequence[np.ndarray] = (),
+    initial_design: np.ndarray | None = None,
 ) -> list[tuple[np.ndarray, str]]:
     """The points (and phases) of the trials from `len(history) + len(running) + 1` to the end
-    of their batch; `running` are the points of the trials after `history` still executing.
+    of their batch; `running` are the points of the trials after `history` still executing;
+    `initial_design`, when known, the `M x d` `sobol_points(bounds, M, seed)` (computing them
+    imports torch, about 2 s for a command).
 
     Trials run in batches of `optimizer.workers`: the M initial trials in batches of their own,
     then batches proposed together. With one worker every batch is one trial, proposed from
@@ -94,7 +103,8 @@ def next_points(
     index = len(history) + len(running)
     start, end = batch_of(index, optimizer)
     if index < optimizer.initial:
-        return [(point, "sobol") for point in sobol_points(bounds, optimizer.initial, optimizer.seed)[index:end]]
+        design = sobol_points(bounds, optimizer.initial, optimizer.seed) if initial_design is None else initial_design
+        return [(point, "sobol") for point in design[index:end]]
     if optimizer.method == "random":
         return [(random_point(bounds, optimizer.seed, trial), "random") for trial in range(index, end)]
     observed = batch_of(start - 1, optimizer)[0] if optimizer.workers > 1 else start

@@ -57,6 +57,7 @@ SUMMARY_FILE = "summary.json"
 SIGNALS_DIR = "signals"
 INPUTS_FILE = "inputs.json"
 PENDING_FILE = "pending.json"
+DESIGN_FILE = "design.json"
 LOCK_FILE = ".lock"
 
 
@@ -196,6 +197,19 @@ class RunDirectory:
                 "optimizer_seconds": pending.optimizer_seconds, "asked": pending.asked}  # fmt: skip
         write_atomically(self.path / PENDING_FILE, json.dumps(data, indent=2) + "\n")
 
+    def initial_design(self) -> np.ndarray | None:
+        """The `M x d` initial (Sobol) points, if the run recorded them (runs asked for do)."""
+        path = self.path / DESIGN_FILE
+        if not path.exists():
+            return None
+        try:
+            design = np.array(json.loads(path.read_text()), dtype=float)
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, TypeError, ValueError) as error:
+            raise RunError(f"{path}: damaged ({getattr(error, 'msg', error)})") from None
+        if design.ndim != 2:
+            raise RunError(f"{path}: damaged (not a list of points)")
+        return design
+
     def clear_pending(self) -> None:
         (self.path / PENDING_FILE).unlink(missing_ok=True)
 
@@ -271,9 +285,11 @@ class StagedRun:
         summary: Summary | None,
         inputs: dict[str, Any] | None = None,
         pending: Pending | None = None,
+        design: np.ndarray | None = None,
     ) -> "RunDirectory":
         """Write the run's files and rename it into place. A run created by `stlopt ask` has no
-        initial signals and summary yet, but the `pending` unoptimised skill."""
+        initial signals and summary yet, but the `pending` unoptimised skill and its initial
+        `design` (`M x d`)."""
         staging = self.path
         run = RunDirectory(staging)
         write_atomically(staging / TASK_FILE, yaml.safe_dump(task.to_yaml_dict(), sort_keys=False))
@@ -289,6 +305,8 @@ class StagedRun:
             run.write_summary(summary)
         if pending is not None:
             run.write_pending(pending)
+        if design is not None:
+            write_atomically(staging / DESIGN_FILE, json.dumps([[float(value) for value in point] for point in design]) + "\n")
         if self.destination.exists():
             self.destination.rmdir()
         os.replace(staging, self.destination)

@@ -71,6 +71,21 @@ def test_an_ask_tell_loop_gives_the_trials_of_optimize(tmp_path, learned_model_f
     assert ask(tmp_path / "asked") is None
 
 
+def test_the_initial_points_are_handed_out_without_loading_torch(tmp_path, learned_model_file):
+    task, first = start(tmp_path, learned_model_file)
+    run = RunDirectory(tmp_path / "asked")
+    from stl_lfd.optim.acquisition import sobol_points
+    from stl_lfd.optim.space import build_search_space
+
+    bounds = build_search_space(run.models(), task.parameters).bounds
+    assert (run.initial_design() == sobol_points(bounds, 2, 4)).all()
+    tell(tmp_path / "asked", execute_kinematically(first.reference))
+    script = "import sys; from stl_lfd.optim.asktell import ask; asked = ask(sys.argv[1]); print(asked.trial, asked.phase, 'torch' in sys.modules)"
+    printed = subprocess.run([sys.executable, "-c", script, str(tmp_path / "asked")], capture_output=True, text=True, cwd=ROOT)
+    assert printed.stdout.split() == ["1", "sobol", "False"], printed.stderr
+    assert json.loads((tmp_path / "asked" / "pending.json").read_text())["x"] == list(run.initial_design()[0])
+
+
 @pytest.mark.slow
 def test_unsafe_trials_are_refused_as_optimize_refuses_them(tmp_path, learned_model_file):
     scene = tmp_path / "tight.yaml"
@@ -173,6 +188,7 @@ def test_the_commands_print_paths_and_robustness_for_scripts(tmp_path, learned_m
 
 
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_a_shell_script_loop_with_the_pybullet_executor_matches_optimize_and_survives_a_kill(tmp_path):
     """The acceptance of ask/tell: a shell loop, killed between ask and tell and started again."""
     stlopt = str(Path(sys.executable).parent / "stlopt")

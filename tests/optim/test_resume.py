@@ -80,6 +80,7 @@ def test_a_run_folder_honours_the_umask(tmp_path, learned_model_file):
 
 
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_two_concurrent_resumes_one_proceeds_one_refuses(tmp_path, learned_model_file):
     task = small_task(tmp_path, learned_model_file)
     run = tmp_path / "run"

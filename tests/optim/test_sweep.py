@@ -40,10 +40,10 @@ def task_file(folder, model_file):
     return path
 
 
-def sweep_file(folder, model_file, extra=""):
+def sweep_file(folder, model_file, extra="", seeds=2):
     task_file(folder, model_file)
     path = folder / "sweep.yaml"
-    path.write_text("name: grid\ntasks: [small.yaml]\nmethods: [stl, random]\nseeds: 2\n" + extra)
+    path.write_text(f"name: grid\ntasks: [small.yaml]\nmethods: [stl, random]\nseeds: {seeds}\n" + extra)
     return path
 
 
@@ -146,6 +146,7 @@ def test_a_sweep_folder_holding_another_run_is_refused(tmp_path, learned_model_f
 
 
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_the_command_prints_the_table_and_writes_the_figure_with_local_workers(tmp_path, learned_model_file):
     path = sweep_file(tmp_path, learned_model_file)
     result = runner.invoke(app, ["sweep", str(path), "--out", str(tmp_path / "out"), "--jobs", "2"])
@@ -159,12 +160,13 @@ def test_the_command_prints_the_table_and_writes_the_figure_with_local_workers(t
 
 
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_ray_gives_the_table_of_local_workers(tmp_path, learned_model_file):
     import ray
 
     from stl_lfd.optim.sweep import ray_results
 
-    plan = load_sweep(sweep_file(tmp_path, learned_model_file))
+    plan = load_sweep(sweep_file(tmp_path, learned_model_file, seeds=1))  # a cell for each of ray's two workers
     run_sweep(plan, tmp_path / "local", lambda cells: local_results(cells, 2))
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
@@ -175,10 +177,11 @@ def test_ray_gives_the_table_of_local_workers(tmp_path, learned_model_file):
 
 
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_ctrl_c_stops_a_sweep_and_the_rerun_does_the_rest(tmp_path, learned_model_file):
     from tests.processes import deliverable_sigint, interrupt, wait_for
 
-    path = sweep_file(tmp_path, learned_model_file, "trials: 12\n")
+    path = sweep_file(tmp_path, learned_model_file, "trials: 6\n")
     stlopt = str(Path(sys.executable).parent / "stlopt")
     command = [stlopt, "sweep", str(path), "--out", str(tmp_path / "out"), "--jobs", "1"]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=deliverable_sigint)

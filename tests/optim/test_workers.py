@@ -96,6 +96,7 @@ def test_a_run_with_two_workers_records_its_trials_in_order_and_resumes(tmp_path
 
 
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_ctrl_c_stops_the_workers_and_the_run_resumes(tmp_path, learned_model_file):
     import signal
     import subprocess
