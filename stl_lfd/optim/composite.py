@@ -18,7 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stl_lfd.optim.acquisition import fit_hyperparameters, maximise_acquisition, single_threaded
+from stl_lfd.optim.acquisition import FIT_ITERATIONS, maximise_acquisition, single_threaded
+from stl_lfd.optim.likelihood import Hyperparameters, LogNormal, fit_hyperparameters
 from stl_lfd.stl import Semantics
 
 MC_SAMPLES = 64
@@ -226,14 +227,36 @@ def _trust_box(center: np.ndarray, length: float) -> np.ndarray:
 
 def fit_multi_output_gp(unit_X, parts: np.ndarray):
     """A `SingleTaskGP` with one independent output per part (`n x d` inputs in the unit cube,
-    `n x m` outputs standardised per part), fitted by maximum marginal likelihood."""
+    `n x m` outputs standardised per part), fitted by maximum marginal likelihood: each output's
+    hyperparameters by `likelihood.fit_hyperparameters`, from the model's own priors, bounds
+    and starting values (BoTorch's defaults), written back into the model."""
     import torch
     from botorch.models import SingleTaskGP
     from botorch.models.transforms import Standardize
 
     train_X = torch.as_tensor(unit_X, dtype=torch.float64)
     train_Y = torch.as_tensor(parts, dtype=torch.float64)
-    return fit_hyperparameters(SingleTaskGP(train_X, train_Y, outcome_transform=Standardize(train_Y.shape[-1])))
+    model = SingleTaskGP(train_X, train_Y, outcome_transform=Standardize(train_Y.shape[-1]))
+    kernel, noise = model.covar_module, model.likelihood.noise_covar
+    outputs, dimensions = parts.shape[1], unit_X.shape[1]
+    lengthscale_prior = LogNormal(float(kernel.lengthscale_prior.loc), float(kernel.lengthscale_prior.scale))
+    noise_prior = LogNormal(float(noise.noise_prior.loc), float(noise.noise_prior.scale))
+    lower = np.concatenate(
+        [np.full(dimensions, float(kernel.raw_lengthscale_constraint.lower_bound)), [float(noise.raw_noise_constraint.lower_bound), -np.inf]]
+    )
+    targets = model.train_targets.detach().numpy().reshape(outputs, -1)
+    with torch.no_grad():
+        starts = zip(
+            kernel.lengthscale.numpy().reshape(outputs, dimensions), noise.noise.numpy().reshape(outputs), model.mean_module.constant.numpy().reshape(outputs)
+        )
+        fitted = [
+            fit_hyperparameters(unit_X, targets[output], Hyperparameters(lengthscales, float(variance), float(constant)), lower, lengthscale_prior, noise_prior, FIT_ITERATIONS)
+            for output, (lengthscales, variance, constant) in enumerate(starts)
+        ]  # fmt: skip
+        kernel.lengthscale = torch.as_tensor(np.array([value.lengthscales for value in fitted])).reshape(kernel.lengthscale.shape)
+        noise.noise = torch.as_tensor([value.noise for value in fitted], dtype=torch.float64).reshape(noise.noise.shape)
+        model.mean_module.constant = torch.as_tensor([value.constant for value in fitted], dtype=torch.float64).reshape(model.mean_module.constant.shape)
+    return model
 
 
 def compose(values, semantics: Semantics, groups: int = 1):
