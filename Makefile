@@ -29,9 +29,10 @@ run: $(STAMP)
 	@echo "Watch the result: $(BIN)/stlopt replay $(RUN_DIR)/phi1 --video $(RUN_DIR)/phi1-best.mp4"
 
 # Two test processes (one per core), each single-threaded: BLAS and torch threads of two
-# processes would otherwise compete for the same two cores. Tests are handed out one at a time,
+# processes would otherwise compete for the same two cores. The README's examples run in one
+# worker (each follows the examples before it); the other tests are handed out one at a time,
 # the longest first (tests/conftest.py), so that both workers stay busy to the end.
-PYTEST := OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 $(BIN)/python -m pytest -q -n 2 --dist load --maxschedchunk 1
+PYTEST := OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 $(BIN)/python -m pytest -q -n 2 --dist loadgroup
 
 test: $(STAMP) lint
 	$(PYTEST)

@@ -127,10 +127,12 @@ def _is_slow(example: Example) -> bool:
 
 def _marks(example: Example) -> list[pytest.MarkDecorator]:
     """Slow examples are marked `slow`; the standalone ones (a whole optimisation, a filmed
-    replay, a sweep) are the longest tests of all: `heavy` too."""
+    replay, a sweep) are the longest tests of all: `heavy` too. All run in one test process
+    (`xdist_group`), so that the examples they follow run once."""
+    marks = [pytest.mark.xdist_group("readme")]
     if example.command.startswith(STANDALONE_COMMANDS):
-        return [pytest.mark.slow, pytest.mark.heavy]
-    return [pytest.mark.slow] if _is_slow(example) else []
+        return marks + [pytest.mark.slow, pytest.mark.heavy]
+    return marks + ([pytest.mark.slow] if _is_slow(example) else [])
 
 
 def _needs(index: int, earlier: int) -> bool:
