@@ -61,7 +61,7 @@ def one_run(arguments: tuple[str, str, str, str, int]) -> dict:
         trials = [json.loads(line) for line in (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()]
     proposed = [trial["optimizer_seconds"] for trial in trials if trial["phase"] != "sobol"]
     timing = {"optimizer_median": statistics.median(proposed), "rollout_median": statistics.median(trial["rollout_seconds"] for trial in trials)}
-    return summary | timing | {"spec": spec, "method": method}
+    return summary.to_json() | timing | {"spec": spec, "method": method}
 
 
 def comparison(backend: str, seeds: int, semantics: str, workers: int = 2) -> list[dict]:

@@ -53,7 +53,7 @@ def one_run(arguments: tuple[str, int]) -> dict:
         best = summary.best_trial
         after = insertion_and_pick(run.signals_path(best)) if best else (None, None)
         visited = len(followed_states(run.best_models()["pick"])) if best else None
-    return summary | {"spec": spec, "before": before, "after": after, "visited": visited}
+    return summary.to_json() | {"spec": spec, "before": before, "after": after, "visited": visited}
 
 
 def main(argv: list[str] | None = None) -> None:
