@@ -74,7 +74,10 @@ def negative_log_likelihood(
     count, dimensions = len(targets), differences.shape[-1]
     scaled = (differences / np.square(parameters.lengthscales)).reshape(count * count, dimensions)
     correlation = np.exp(-0.5 * scaled.sum(axis=-1)).reshape(count, count)
-    factor = np.linalg.cholesky(correlation + parameters.noise * np.eye(count))
+    try:
+        factor = np.linalg.cholesky(correlation + parameters.noise * np.eye(count))
+    except np.linalg.LinAlgError:  # not numerically positive definite: L-BFGS-B's line search steps back
+        return np.inf, np.zeros_like(vector)
     inverse_factor = _lower_triangular_inverse(factor)
     inverse = inverse_factor.T @ inverse_factor
     residual = targets - parameters.constant
@@ -113,7 +116,7 @@ def fit_hyperparameters(
         bounds=bounds,
         options={"maxiter": iterations},
     )
-    return Hyperparameters.from_vector(result.x)
+    return Hyperparameters.from_vector(result.x) if np.all(np.isfinite(result.x)) else start
 
 
 def _lower_triangular_inverse(factor: np.ndarray) -> np.ndarray:

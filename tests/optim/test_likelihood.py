@@ -69,3 +69,10 @@ def test_the_fit_raises_every_outputs_likelihood_and_keeps_the_bounds():
     after = _gpytorch_losses(fitted).detach().numpy()
     assert np.all(after < before - 0.05)
     assert torch.all(fitted.covar_module.lengthscale >= 0.025) and torch.all(fitted.likelihood.noise_covar.noise >= 1e-4)
+
+
+def test_a_matrix_that_is_not_positive_definite_is_an_infinite_loss_not_an_error():
+    inputs = np.zeros((3, 2))  # three equal points: K = 1 + noise everywhere, singular without noise
+    lengthscale_prior, noise_prior = LogNormal(1.0, 1.0), LogNormal(-4.0, 1.0)
+    loss, gradient = negative_log_likelihood(np.array([1.0, 1.0, -0.5, 0.0]), squared_differences(inputs), np.zeros(3), lengthscale_prior, noise_prior)
+    assert loss == np.inf and np.all(gradient == 0)
