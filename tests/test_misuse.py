@@ -382,6 +382,7 @@ CASES = [
     Case("tell-missing-run", ["tell", "{case}/nope", "{csv}"], 9, "no such run directory"),
     Case("ask-run-with-seed", ["ask", "{run}", "--seed", "3"], 5, "a run directory keeps its own settings"),
     Case("ask-not-a-run", ["ask", "{case}"], 9, "not a run directory of stlopt optimize"),
+    Case("ask-damaged-design", ["ask", "{case}/run"], 9, "design.json: damaged", damage=lambda run: (run / "design.json").write_text("[[0.1,")),
     Case("ask-task-missing", ["ask", "{case}/nope.yaml", "--out", "{case}/out"], 5, "no such YAML file"),
     # Sweeps
     Case("sweep-missing", ["sweep", "{case}/nope.yaml", "--out", "{case}/out"], 5, "no such YAML file"),
