@@ -13,11 +13,12 @@ from typing import Iterator
 
 import numpy as np
 
+from stl_lfd.optim.likelihood import Hyperparameters, LogNormal, maximise_likelihood
+
 ACQUISITION_RESTARTS = 8
 RAW_SAMPLES = 256
-# L-BFGS-B iterations of the GP hyperparameter fit. BoTorch's default runs to convergence
-# (0.84 s at n = 30, d = 21 on 2 cores); 100 iterations take 0.17 s and reach a marginal log
-# likelihood within 0.001 of the converged one.
+# L-BFGS-B iterations of the GP hyperparameter fit (per output): 100 reached a marginal log
+# likelihood within 0.001 of the converged one at n = 30, d = 21.
 FIT_ITERATIONS = 100
 # L-BFGS-B iterations of each acquisition restart. BoTorch's default (200) spent 2-3 s per
 # PI proposal on phi2-shaped problems alone (8-15 s beside another run; flat log-PI, ~750
@@ -123,20 +124,56 @@ def fit_gp(X: np.ndarray, Y: np.ndarray, bounds: np.ndarray):
         input_transform=Normalize(X.shape[1], bounds=torch.as_tensor(bounds, dtype=torch.float64)),
         outcome_transform=Standardize(1),
     )
-    return fit_hyperparameters(model)
+    return fit_hyperparameters(model, (X - bounds[0]) / (bounds[1] - bounds[0]))
 
 
-def fit_hyperparameters(model):
-    """`model` with its hyperparameters fitted by maximum marginal likelihood (L-BFGS-B capped
-    at FIT_ITERATIONS)."""
-    from botorch.exceptions.warnings import OptimizationWarning
-    from botorch.fit import fit_gpytorch_mll
-    from gpytorch.mlls import ExactMarginalLogLikelihood
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", OptimizationWarning)  # stopping at the iteration cap is intended
-        fit_gpytorch_mll(ExactMarginalLogLikelihood(model.likelihood, model), optimizer_kwargs={"options": {"maxiter": FIT_ITERATIONS}})
+def fit_hyperparameters(model, unit_inputs: np.ndarray):
+    """`model` (a `SingleTaskGP` with one or more outputs) with each output's hyperparameters
+    fitted by maximum marginal likelihood on its `n x d` inputs in the unit cube:
+    `likelihood.maximise_likelihood` (L-BFGS-B capped at FIT_ITERATIONS) from the model's own
+    priors, bounds and starting values (BoTorch's defaults), written back into the model."""
+    outputs = model.num_outputs
+    lengthscale_prior, noise_prior, lower = _priors_and_bounds(model, unit_inputs.shape[1])
+    targets = model.train_targets.detach().numpy().reshape(outputs, -1)
+    fitted = [
+        maximise_likelihood(unit_inputs, targets[output], start, lower, lengthscale_prior, noise_prior, FIT_ITERATIONS)
+        for output, start in enumerate(_hyperparameters(model, outputs))
+    ]
+    _set_hyperparameters(model, fitted)
     return model
+
+
+def _priors_and_bounds(model, dimensions: int) -> tuple[LogNormal, LogNormal, np.ndarray]:
+    """The lengthscale and noise priors of `model` and the `d + 2` lower bounds of
+    `Hyperparameters.vector` (lengthscales, noise; none for the constant)."""
+    kernel, noise = model.covar_module, model.likelihood.noise_covar
+    lengthscale_prior = LogNormal(float(kernel.lengthscale_prior.loc), float(kernel.lengthscale_prior.scale))
+    noise_prior = LogNormal(float(noise.noise_prior.loc), float(noise.noise_prior.scale))
+    lower = np.concatenate(
+        [np.full(dimensions, float(kernel.raw_lengthscale_constraint.lower_bound)), [float(noise.raw_noise_constraint.lower_bound), -np.inf]]
+    )
+    return lengthscale_prior, noise_prior, lower
+
+
+def _hyperparameters(model, outputs: int) -> list[Hyperparameters]:
+    """The current hyperparameters of each of the `outputs` of `model`."""
+    import torch
+
+    with torch.no_grad():
+        lengthscales = model.covar_module.lengthscale.numpy().reshape(outputs, -1)
+        noises = model.likelihood.noise_covar.noise.numpy().reshape(outputs)
+        constants = model.mean_module.constant.numpy().reshape(outputs)
+    return [Hyperparameters(lengthscales[output], float(noises[output]), float(constants[output])) for output in range(outputs)]
+
+
+def _set_hyperparameters(model, fitted: list[Hyperparameters]) -> None:
+    import torch
+
+    kernel, noise, mean = model.covar_module, model.likelihood.noise_covar, model.mean_module
+    with torch.no_grad():
+        kernel.lengthscale = torch.as_tensor(np.array([value.lengthscales for value in fitted])).reshape(kernel.lengthscale.shape)
+        noise.noise = torch.as_tensor([value.noise for value in fitted], dtype=torch.float64).reshape(noise.noise.shape)
+        mean.constant = torch.as_tensor([value.constant for value in fitted], dtype=torch.float64).reshape(mean.constant.shape)
 
 
 def _float64():

@@ -18,8 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stl_lfd.optim.acquisition import FIT_ITERATIONS, maximise_acquisition, single_threaded
-from stl_lfd.optim.likelihood import Hyperparameters, LogNormal, fit_hyperparameters
+from stl_lfd.optim.acquisition import fit_hyperparameters, maximise_acquisition, single_threaded
 from stl_lfd.stl import Semantics
 
 MC_SAMPLES = 64
@@ -227,57 +226,14 @@ def _trust_box(center: np.ndarray, length: float) -> np.ndarray:
 
 def fit_multi_output_gp(unit_X, parts: np.ndarray):
     """A `SingleTaskGP` with one independent output per part (`n x d` inputs in the unit cube,
-    `n x m` outputs standardised per part), fitted by maximum marginal likelihood: each output's
-    hyperparameters by `likelihood.fit_hyperparameters`, from the model's own priors, bounds
-    and starting values (BoTorch's defaults), written back into the model."""
+    `n x m` outputs standardised per part), fitted by maximum marginal likelihood."""
     import torch
     from botorch.models import SingleTaskGP
     from botorch.models.transforms import Standardize
 
     train_X = torch.as_tensor(unit_X, dtype=torch.float64)
     train_Y = torch.as_tensor(parts, dtype=torch.float64)
-    model = SingleTaskGP(train_X, train_Y, outcome_transform=Standardize(train_Y.shape[-1]))
-    lengthscale_prior, noise_prior, lower = _priors_and_bounds(model, unit_X.shape[1])
-    targets = model.train_targets.detach().numpy().reshape(parts.shape[1], -1)
-    fitted = [
-        fit_hyperparameters(unit_X, targets[output], start, lower, lengthscale_prior, noise_prior, FIT_ITERATIONS)
-        for output, start in enumerate(_hyperparameters(model, parts.shape[1]))
-    ]
-    _set_hyperparameters(model, fitted)
-    return model
-
-
-def _priors_and_bounds(model, dimensions: int) -> tuple[LogNormal, LogNormal, np.ndarray]:
-    """The lengthscale and noise priors of `model` and the `d + 2` lower bounds of
-    `Hyperparameters.vector` (lengthscales, noise; none for the constant)."""
-    kernel, noise = model.covar_module, model.likelihood.noise_covar
-    lengthscale_prior = LogNormal(float(kernel.lengthscale_prior.loc), float(kernel.lengthscale_prior.scale))
-    noise_prior = LogNormal(float(noise.noise_prior.loc), float(noise.noise_prior.scale))
-    lower = np.concatenate(
-        [np.full(dimensions, float(kernel.raw_lengthscale_constraint.lower_bound)), [float(noise.raw_noise_constraint.lower_bound), -np.inf]]
-    )
-    return lengthscale_prior, noise_prior, lower
-
-
-def _hyperparameters(model, outputs: int) -> list[Hyperparameters]:
-    """The current hyperparameters of each of the `outputs` of `model`."""
-    import torch
-
-    with torch.no_grad():
-        lengthscales = model.covar_module.lengthscale.numpy().reshape(outputs, -1)
-        noises = model.likelihood.noise_covar.noise.numpy().reshape(outputs)
-        constants = model.mean_module.constant.numpy().reshape(outputs)
-    return [Hyperparameters(lengthscales[output], float(noises[output]), float(constants[output])) for output in range(outputs)]
-
-
-def _set_hyperparameters(model, fitted: list[Hyperparameters]) -> None:
-    import torch
-
-    kernel, noise, mean = model.covar_module, model.likelihood.noise_covar, model.mean_module
-    with torch.no_grad():
-        kernel.lengthscale = torch.as_tensor(np.array([value.lengthscales for value in fitted])).reshape(kernel.lengthscale.shape)
-        noise.noise = torch.as_tensor([value.noise for value in fitted], dtype=torch.float64).reshape(noise.noise.shape)
-        mean.constant = torch.as_tensor([value.constant for value in fitted], dtype=torch.float64).reshape(mean.constant.shape)
+    return fit_hyperparameters(SingleTaskGP(train_X, train_Y, outcome_transform=Standardize(train_Y.shape[-1])), unit_X)
 
 
 def compose(values, semantics: Semantics, groups: int = 1):

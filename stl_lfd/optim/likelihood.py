@@ -1,13 +1,13 @@
-"""Maximum marginal likelihood hyperparameters of the parts' Gaussian processes (method `stl`),
-in numpy with analytic gradients.
+"""Maximum marginal likelihood hyperparameters of the optimiser's Gaussian processes, in numpy
+with analytic gradients.
 
 The model is BoTorch's `SingleTaskGP` with its default priors (an RBF kernel with one
 lengthscale per input, a log-normal prior on each, a log-normal prior on the noise, a constant
-mean), one independent GP per output; `fit_multi_output_gp` (in `composite`) reads the priors,
+mean), one independent GP per output; `acquisition.fit_hyperparameters` reads the priors,
 bounds and starting values from the model and writes the fitted values back into it. The
 objective is gpytorch's `ExactMarginalLogLikelihood` (priors included, divided by the number of
 observations), which a test checks value for value and gradient for gradient. Computed here it
-costs about a twentieth of gpytorch's autograd for these small matrices (n up to a few hundred),
+costs a fraction of gpytorch's autograd for these small matrices (n up to a few hundred),
 which made the GP fit most of the optimiser's time per trial.
 """
 
@@ -92,7 +92,7 @@ def negative_log_likelihood(
     return -(log_likelihood + lengthscale_log_prior + noise_log_prior) / count, -gradient / count
 
 
-def fit_hyperparameters(
+def maximise_likelihood(
     inputs: np.ndarray,
     targets: np.ndarray,
     start: Hyperparameters,

@@ -76,3 +76,21 @@ def test_a_matrix_that_is_not_positive_definite_is_an_infinite_loss_not_an_error
     lengthscale_prior, noise_prior = LogNormal(1.0, 1.0), LogNormal(-4.0, 1.0)
     loss, gradient = negative_log_likelihood(np.array([1.0, 1.0, -0.5, 0.0]), squared_differences(inputs), np.zeros(3), lengthscale_prior, noise_prior)
     assert loss == np.inf and np.all(gradient == 0)
+
+
+def test_pis_gp_is_fitted_the_same_way_on_inputs_normalised_to_the_bounds():
+    from stl_lfd.optim.acquisition import fit_gp
+
+    rng = np.random.default_rng(5)
+    bounds = np.array([[-2.0, 0.0, 10.0], [2.0, 0.5, 30.0]])
+    X = bounds[0] + rng.random((20, 3)) * (bounds[1] - bounds[0])
+    Y = np.sin(X[:, 0]) + X[:, 1] - 0.01 * X[:, 2]
+    model = fit_gp(X, Y, bounds)
+    fitted = _gpytorch_losses(model).detach().numpy()
+    with torch.no_grad():  # back to BoTorch's starting values: the fit must have improved on them
+        model.covar_module.lengthscale = torch.full_like(
+            model.covar_module.lengthscale, float(np.exp(model.covar_module.lengthscale_prior.loc - model.covar_module.lengthscale_prior.scale**2))
+        )
+        model.likelihood.noise_covar.noise = torch.full_like(model.likelihood.noise_covar.noise, float(np.exp(-5.0)))
+        model.mean_module.constant = torch.zeros_like(model.mean_module.constant)
+    assert np.all(fitted < _gpytorch_losses(model).detach().numpy() - 0.05)
