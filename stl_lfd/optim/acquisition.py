@@ -13,12 +13,13 @@ from typing import Iterator
 
 import numpy as np
 
-from stl_lfd.optim.likelihood import Hyperparameters, LogNormal, maximise_likelihood
+from stl_lfd.optim.likelihood import Hyperparameters, LogNormal, maximise_likelihood, squared_differences
 
 ACQUISITION_RESTARTS = 8
 RAW_SAMPLES = 256
 # L-BFGS-B iterations of the GP hyperparameter fit (per output): 100 reached a marginal log
-# likelihood within 0.001 of the converged one at n = 30, d = 21.
+# likelihood within 0.001 of the converged one at n = 30, d = 21 (measured with gpytorch's fit,
+# which the numpy likelihood replaced; the objective is the same).
 FIT_ITERATIONS = 100
 # L-BFGS-B iterations of each acquisition restart. BoTorch's default (200) spent 2-3 s per
 # PI proposal on phi2-shaped problems alone (8-15 s beside another run; flat log-PI, ~750
@@ -135,8 +136,9 @@ def fit_hyperparameters(model, unit_inputs: np.ndarray):
     outputs = model.num_outputs
     lengthscale_prior, noise_prior, lower = _priors_and_bounds(model, unit_inputs.shape[1])
     targets = model.train_targets.detach().numpy().reshape(outputs, -1)
+    differences = squared_differences(unit_inputs)
     fitted = [
-        maximise_likelihood(unit_inputs, targets[output], start, lower, lengthscale_prior, noise_prior, FIT_ITERATIONS)
+        maximise_likelihood(differences, targets[output], start, lower, lengthscale_prior, noise_prior, FIT_ITERATIONS)
         for output, start in enumerate(_hyperparameters(model, outputs))
     ]
     _set_hyperparameters(model, fitted)

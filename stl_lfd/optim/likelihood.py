@@ -93,7 +93,7 @@ def negative_log_likelihood(
 
 
 def maximise_likelihood(
-    inputs: np.ndarray,
+    differences: np.ndarray,
     targets: np.ndarray,
     start: Hyperparameters,
     lower: np.ndarray,
@@ -103,14 +103,15 @@ def maximise_likelihood(
 ) -> Hyperparameters:
     """The hyperparameters of one output maximising its marginal likelihood and priors
     (L-BFGS-B from `start`, at most `iterations`), each at least its `lower` (`d + 2`; -inf
-    for none)."""
+    for none); `differences` are the `squared_differences` of the inputs, which the outputs of
+    one model share."""
     from scipy.optimize import minimize
 
     bounds = [(None if np.isinf(bound) else float(bound), None) for bound in lower]
     result = minimize(
         negative_log_likelihood,
         start.vector(),
-        args=(squared_differences(inputs), targets, lengthscale_prior, noise_prior),
+        args=(differences, targets, lengthscale_prior, noise_prior),
         jac=True,
         method="L-BFGS-B",
         bounds=bounds,
