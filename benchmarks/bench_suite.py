@@ -39,6 +39,15 @@ METHODS = ("stl", "pi", "logei", "random", "tpe")
 TPE_STARTUP = 10  # Optuna's default n_startup_trials: random points before TPE proposes
 
 
+def method_name(text: str) -> str:
+    """A method of `METHODS`, or a variant `METHOD/mK` that runs it with K initial trials
+    instead of the problem's."""
+    name, _, design = text.partition("/m")
+    if name not in METHODS or name == "tpe" and design or design and not design.isdigit():
+        raise argparse.ArgumentTypeError(f"{text!r}: expected one of {', '.join(METHODS)}, or METHOD/mK")
+    return text
+
+
 def problem_names() -> list[str]:
     return sorted(path.stem for path in PROBLEMS_DIR.glob("*.yaml"))
 
@@ -60,7 +69,8 @@ def run_one(problem: str, method: str, seed: int) -> dict:
     if method == "tpe":
         trials, initial = _run_tpe(task, seed)
     else:
-        trials, initial = _run_tool(task.with_overrides(method=method, seed=seed))
+        name, _, design = method.partition("/m")
+        trials, initial = _run_tool(task.with_overrides(method=name, seed=seed, initial=int(design) if design else None))
     best_x = max((trial for trial in trials if trial["robustness"] is not None), key=lambda trial: trial["robustness"], default={}).get("x")
     robustness = [trial["robustness"] for trial in trials]
     satisfied = [trial["trial"] for trial in trials if trial["robustness"] is not None and trial["robustness"] > 0]
@@ -324,7 +334,7 @@ def main(argv: list[str] | None = None) -> None:
         os.environ.setdefault(variable, "1")  # inherited by the spawned workers
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--problems", nargs="+", default=problem_names())
-    parser.add_argument("--methods", nargs="+", default=list(METHODS), choices=METHODS)
+    parser.add_argument("--methods", nargs="+", default=list(METHODS), type=method_name, help="METHOD, or METHOD/mK for K initial trials")
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--jobs", type=int, default=2)
