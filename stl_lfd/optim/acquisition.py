@@ -28,7 +28,9 @@ FIT_ITERATIONS = 100
 ACQUISITION_ITERATIONS = 60
 # SINGLE_THREAD: these matrices are tiny (n <= a few hundred), so one thread is as fast as two,
 # and it avoids OpenMP threads spinning against the simulator or a parallel run on 2 cores
-# (measured: proposals 30x slower with two runs side by side).
+# (measured: proposals 30x slower with two runs side by side). BLAS too, for reproducibility:
+# OpenBLAS's triangular solve rounds differently with more threads, the GP fit's L-BFGS-B
+# magnifies that, and the same seed gave other trials on a machine with another core count.
 
 
 def sobol_points(bounds: np.ndarray, count: int, seed: int) -> np.ndarray:
@@ -69,13 +71,16 @@ def propose(X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, method: str, xi: f
 
 @contextmanager
 def single_threaded() -> Iterator[None]:
-    """Torch on one thread for the block (see SINGLE_THREAD), restored afterwards."""
+    """Torch and BLAS on one thread for the block (see SINGLE_THREAD), restored afterwards."""
+    import scipy.linalg  # noqa: F401 (loaded before the limit, which only reaches loaded libraries)
     import torch
+    from threadpoolctl import threadpool_limits
 
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        yield
+        with threadpool_limits(limits=1, user_api="blas"):
+            yield
     finally:
         torch.set_num_threads(threads)
 
@@ -132,15 +137,17 @@ def fit_hyperparameters(model, unit_inputs: np.ndarray):
     """`model` (a `SingleTaskGP` with one or more outputs) with each output's hyperparameters
     fitted by maximum marginal likelihood on its `n x d` inputs in the unit cube:
     `likelihood.maximise_likelihood` (L-BFGS-B capped at FIT_ITERATIONS) from the model's own
-    priors, bounds and starting values (BoTorch's defaults), written back into the model."""
+    priors, bounds and starting values (BoTorch's defaults), written back into the model;
+    single-threaded, so that the result does not depend on the machine's cores."""
     outputs = model.num_outputs
     lengthscale_prior, noise_prior, lower = _priors_and_bounds(model, unit_inputs.shape[1])
     targets = model.train_targets.detach().numpy().reshape(outputs, -1)
     differences = squared_differences(unit_inputs)
-    fitted = [
-        maximise_likelihood(differences, targets[output], start, lower, lengthscale_prior, noise_prior, FIT_ITERATIONS)
-        for output, start in enumerate(_hyperparameters(model, outputs))
-    ]
+    with single_threaded():
+        fitted = [
+            maximise_likelihood(differences, targets[output], start, lower, lengthscale_prior, noise_prior, FIT_ITERATIONS)
+            for output, start in enumerate(_hyperparameters(model, outputs))
+        ]
     _set_hyperparameters(model, fitted)
     return model
 

@@ -104,26 +104,20 @@ def maximise_likelihood(
     """The hyperparameters of one output maximising its marginal likelihood and priors
     (L-BFGS-B from `start`, at most `iterations`), each at least its `lower` (`d + 2`; -inf
     for none); `differences` are the `squared_differences` of the inputs, which the outputs of
-    one model share.
-
-    BLAS runs on one thread here: OpenBLAS's triangular solve rounds differently with more
-    threads, L-BFGS-B magnifies the difference, and the same seed would give other trials on a
-    machine with another number of cores."""
-    import scipy.linalg  # noqa: F401 (loaded before the limit, which only reaches loaded libraries)
+    one model share. The result depends on BLAS's thread count (OpenBLAS's triangular solve
+    rounds differently with more threads): `acquisition.fit_hyperparameters` calls it on one."""
     from scipy.optimize import minimize
-    from threadpoolctl import threadpool_limits
 
     bounds = [(None if np.isinf(bound) else float(bound), None) for bound in lower]
-    with threadpool_limits(limits=1, user_api="blas"):
-        result = minimize(
-            negative_log_likelihood,
-            start.vector(),
-            args=(differences, targets, lengthscale_prior, noise_prior),
-            jac=True,
-            method="L-BFGS-B",
-            bounds=bounds,
-            options={"maxiter": iterations},
-        )
+    result = minimize(
+        negative_log_likelihood,
+        start.vector(),
+        args=(differences, targets, lengthscale_prior, noise_prior),
+        jac=True,
+        method="L-BFGS-B",
+        bounds=bounds,
+        options={"maxiter": iterations},
+    )
     return Hyperparameters.from_vector(result.x) if np.all(np.isfinite(result.x)) else start
 
 
