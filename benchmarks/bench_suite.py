@@ -39,12 +39,18 @@ METHODS = ("stl", "pi", "logei", "random", "tpe")
 TPE_STARTUP = 10  # Optuna's default n_startup_trials: random points before TPE proposes
 
 
-def method_name(text: str) -> str:
+def method_and_initial(text: str) -> tuple[str, int | None]:
     """A method of `METHODS`, or a variant `METHOD/mK` that runs it with K initial trials
-    instead of the problem's."""
+    instead of the problem's (None: the problem's)."""
     name, _, design = text.partition("/m")
-    if name not in METHODS or name == "tpe" and design or design and not design.isdigit():
+    if name not in METHODS or (design and (name == "tpe" or not design.isdigit())):
         raise argparse.ArgumentTypeError(f"{text!r}: expected one of {', '.join(METHODS)}, or METHOD/mK")
+    return name, int(design) if design else None
+
+
+def method_name(text: str) -> str:
+    """`text` if it names a method or a variant (`method_and_initial`), for argparse."""
+    method_and_initial(text)
     return text
 
 
@@ -69,8 +75,8 @@ def run_one(problem: str, method: str, seed: int) -> dict:
     if method == "tpe":
         trials, initial = _run_tpe(task, seed)
     else:
-        name, _, design = method.partition("/m")
-        trials, initial = _run_tool(task.with_overrides(method=name, seed=seed, initial=int(design) if design else None))
+        name, initial_trials = method_and_initial(method)
+        trials, initial = _run_tool(task.with_overrides(method=name, seed=seed, initial=initial_trials))
     best_x = max((trial for trial in trials if trial["robustness"] is not None), key=lambda trial: trial["robustness"], default={}).get("x")
     robustness = [trial["robustness"] for trial in trials]
     satisfied = [trial["trial"] for trial in trials if trial["robustness"] is not None and trial["robustness"] > 0]
