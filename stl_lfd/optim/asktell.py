@@ -155,6 +155,7 @@ def tell(out: Path, signals_path: Path | None, failure: str | None = None) -> To
             pending.trial, pending.phase, pending.x, robustness, "ok" if robustness is not None else "failed", error,
             optimizer_seconds=pending.optimizer_seconds, rollout_seconds=max(seconds, 0.0),
             components=outcome.components if robustness is not None else None,
+            routes=outcome.routes if robustness is not None else None,
         )  # fmt: skip
         recorder = Recorder(prepared)
         recorder.record(trial, outcome.payload if outcome is not None else None, trial.wall_seconds)

@@ -80,6 +80,7 @@ def propose_composite(
     count: int = 1,
     pending: np.ndarray | None = None,
     groups: int = 1,
+    routes: tuple[np.ndarray, tuple[int, ...]] | None = None,
 ) -> np.ndarray:
     """The next point (or batch of `count` points) of composite BO.
 
@@ -99,6 +100,12 @@ def propose_composite(
         groups: the parts are `groups` equal groups side by side (the spec's parts at each of
             several object placements): each group composes by `semantics`, and the result is
             the minimum over the groups.
+        routes: `n x r` robustness of formulas that each imply a part, and the index of that
+            part for each (`SpecParts.routes`). Each gets its own GP output, and a sample of a
+            part is the largest of its own and its routes' samples: a part holds if a route
+            does. While the spec is violated the search then spans the whole box, not the
+            trust region: the part's own robustness may lead away from where a route is
+            close to holding.
 
     Returns:
         `d` next point, or `count x d` points when `count > 1`.
@@ -108,21 +115,36 @@ def propose_composite(
     with single_threaded():
         torch.manual_seed(seed)
         unit = (X - bounds[0]) / (bounds[1] - bounds[0])
-        model = fit_multi_output_gp(unit, parts)
+        route_values, route_parts = routes if routes is not None else (np.empty((len(X), 0)), ())
+        model = fit_multi_output_gp(unit, np.hstack([parts, route_values]))
         posterior = PartsPosterior(model)
         box = _trust_box(unit[int(np.argmax(Y))], trust_region_length(Y, initial))
+        if route_parts and np.max(Y) <= 0:
+            box = np.array([np.zeros(unit.shape[1]), np.ones(unit.shape[1])])
         executing = [] if pending is None else list((pending - bounds[0]) / (bounds[1] - bounds[0]))
         chosen: list[np.ndarray] = []
         for index in range(count):
             if executing or chosen:
                 posterior = PartsPosterior(model).with_pending(torch.as_tensor(np.array(executing + chosen), dtype=torch.float64))
-            acquisition = composed_log_ei(model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed + index, posterior, groups)
+            acquisition = composed_log_ei(
+                model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed + index, posterior, groups, route_parts
+            )
             chosen.append(maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed + index))
     points = np.clip(bounds[0] + np.array(chosen) * (bounds[1] - bounds[0]), bounds[0], bounds[1])
     return points[0] if count == 1 else points
 
 
-def composed_log_ei(model, best: float, scale: float, semantics: Semantics, parts: int, seed: int, posterior: "PartsPosterior | None" = None, groups: int = 1):
+def composed_log_ei(
+    model,
+    best: float,
+    scale: float,
+    semantics: Semantics,
+    parts: int,
+    seed: int,
+    posterior: "PartsPosterior | None" = None,
+    groups: int = 1,
+    route_parts: tuple[int, ...] = (),
+):
     """Log expected improvement of the composed robustness over `best`, by quasi-Monte Carlo.
 
     The parts' GPs are independent, so at one point their joint posterior is `m` independent
@@ -132,7 +154,9 @@ def composed_log_ei(model, best: float, scale: float, semantics: Semantics, part
     `PartsPosterior` instead of the joint posterior and its Cholesky factor (0.24 s instead of
     1.75 s to maximise on a phi1 history). As in LogEI, the improvement's ReLU is smoothed
     (softplus with temperature `0.01 scale`) and averaged in log space, so that the acquisition
-    keeps a gradient far from improvement.
+    keeps a gradient far from improvement. The model's outputs after the first `parts` are
+    routes: output `parts + k` implies part `route_parts[k]`, whose sample is raised to the
+    route's where that is larger.
     """
     import math
 
@@ -140,7 +164,7 @@ def composed_log_ei(model, best: float, scale: float, semantics: Semantics, part
     from botorch.acquisition import AcquisitionFunction
     from torch.quasirandom import SobolEngine
 
-    unit = SobolEngine(parts, scramble=True, seed=seed).draw(MC_SAMPLES, dtype=torch.float64)
+    unit = SobolEngine(parts + len(route_parts), scramble=True, seed=seed).draw(MC_SAMPLES, dtype=torch.float64)
     normal = torch.distributions.Normal(0.0, 1.0).icdf(unit.clamp(1e-6, 1 - 1e-6))  # S x m
     temperature = 0.01 * scale
     posterior = posterior if posterior is not None else PartsPosterior(model)
@@ -148,12 +172,24 @@ def composed_log_ei(model, best: float, scale: float, semantics: Semantics, part
     class ComposedLogEI(AcquisitionFunction):
         def forward(self, X):  # b x 1 x d -> b
             mean, std = posterior(X[..., 0, :])  # b x m each
-            samples = mean.unsqueeze(-2) + std.unsqueeze(-2) * normal  # b x S x m
+            samples = mean.unsqueeze(-2) + std.unsqueeze(-2) * normal  # b x S x (m + r)
+            samples = _through_routes(samples, parts, route_parts)  # b x S x m
             improvement = (compose(samples, semantics, groups) - best) / temperature  # b x S
             log_softplus = torch.where(improvement < -30, improvement, torch.nn.functional.softplus(improvement).clamp_min(1e-300).log())
             return torch.logsumexp(log_softplus, dim=-1) - math.log(MC_SAMPLES) + math.log(temperature)
 
     return ComposedLogEI(model)
+
+
+def _through_routes(samples, parts: int, route_parts: tuple[int, ...]):
+    """`... x (m + r)` samples of the parts and routes -> `... x m`: each part the largest of
+    its own sample and its routes'."""
+    import torch
+
+    columns = [samples[..., part] for part in range(parts)]
+    for route, part in enumerate(route_parts):
+        columns[part] = torch.maximum(columns[part], samples[..., parts + route])
+    return torch.stack(columns, dim=-1)
 
 
 class PartsPosterior:

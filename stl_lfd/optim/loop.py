@@ -36,6 +36,8 @@ class Trial:
         robustness: the objective, or None when the trial failed.
         components: the robustness of each top-level part of the spec (its text -> value),
             of which `robustness` is the composition; None when the trial failed.
+        routes: the robustness of each of the spec's routes (`SpecParts.routes`), formulas
+            that imply a part; None when the spec has none or the trial failed.
         status: `ok` or `failed` (then `error` says why).
         optimizer_seconds: time spent choosing x (GP fit and acquisition).
         rollout_seconds: time spent executing and evaluating x.
@@ -51,6 +53,7 @@ class Trial:
     rollout_seconds: float = 0.0
     parameters: dict[str, float] = field(default_factory=dict)
     components: dict[str, float] | None = None
+    routes: dict[str, float] | None = None
 
     @property
     def satisfied(self) -> bool:
@@ -63,12 +66,13 @@ class Trial:
 
 @dataclass
 class Outcome:
-    """What the objective returns for one point: the robustness, its parts (text -> value), and
-    a `payload` kept for the caller (signals)."""
+    """What the objective returns for one point: the robustness, its parts and routes (text ->
+    value), and a `payload` kept for the caller (signals)."""
 
     robustness: float
     payload: object = None
     components: dict[str, float] | None = None
+    routes: dict[str, float] | None = None
 
 
 def next_point(
@@ -163,23 +167,28 @@ def _composite_points(
     if composite is None:  # trials recorded without their parts (an older run): the robustness alone
         composite, semantics = Y[:, None], Semantics("classic")
     groups = getattr(parts, "groups", 1) if composite.shape[1] > 1 else 1
+    routes = getattr(parts, "routes", ()) if parts is not None and composite.shape[1] == len(parts.names) else ()
+    route_values = part_observations(history, tuple(route.name for route in routes), "routes") if routes else None
     points = propose_composite(
-        X, composite, Y, bounds, semantics, optimizer.initial, optimizer.seed + len(history), count, pending if len(pending) else None, groups
-    )
+        X, composite, Y, bounds, semantics, optimizer.initial, optimizer.seed + len(history), count, pending if len(pending) else None, groups,
+        None if route_values is None else (route_values, tuple(route.part for route in routes)),
+    )  # fmt: skip
     return points[None] if count == 1 else points
 
 
-def part_observations(history: list[Trial], names: tuple[str, ...]) -> np.ndarray | None:
+def part_observations(history: list[Trial], names: tuple[str, ...], recorded_as: str = "components") -> np.ndarray | None:
     """`n x m` robustness of each part at each trial (failed trials enter with each part's worst
-    value, as in `observations`), or None when a successful trial did not record its parts."""
+    value, as in `observations`), or None when a successful trial did not record its parts.
+    With `recorded_as="routes"`, the same for the spec's routes."""
     rows = []
     for trial in history:
+        values = getattr(trial, recorded_as)
         if trial.robustness is None:
             rows.append(None)
-        elif trial.components is None or any(name not in trial.components for name in names):
+        elif values is None or any(name not in values for name in names):
             return None
         else:
-            rows.append([trial.components[name] for name in names])
+            rows.append([values[name] for name in names])
     recorded = np.array([row for row in rows if row is not None], dtype=float)
     finite = np.where(np.isfinite(recorded), recorded, np.nan)
     with warnings.catch_warnings():
@@ -257,7 +266,7 @@ def run_trials(
             elif not np.isfinite(outcome.robustness):
                 trial.status, trial.error, payload = "failed", f"robustness is {outcome.robustness}", outcome.payload
             else:
-                trial.robustness, trial.components, payload = float(outcome.robustness), outcome.components, outcome.payload
+                trial.robustness, trial.components, trial.routes, payload = float(outcome.robustness), outcome.components, outcome.routes, outcome.payload
             history.append(trial)
             on_trial(trial, payload)
         if not pipelined and len(history) < optimizer.trials:

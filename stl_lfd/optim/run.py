@@ -96,7 +96,8 @@ class SkillObjective:
             raise SignalError(f"{signals.source}: no column {', '.join(missing)}, which the spec needs")
         # The spec is evaluated once, part by part; composing the parts is exactly its robustness.
         values = self.parts(signals.columns, signals.times)
-        return Outcome(self.parts.compose(values), signals, dict(zip(self.parts.names, values.tolist())))
+        routes = self.parts.route_values(signals.columns, signals.times) or None
+        return Outcome(self.parts.compose(values), signals, dict(zip(self.parts.names, values.tolist())), routes)
 
 
 @dataclass

@@ -404,6 +404,7 @@ def _trial_to_json(trial: Trial) -> dict[str, Any]:
         "rollout_seconds": round(trial.rollout_seconds, 4),
         "parameters": trial.parameters,
         "components": trial.components,
+        **({"routes": trial.routes} if trial.routes else {}),
         "x": [float(value) for value in trial.x],
     }
 
@@ -420,6 +421,7 @@ def _trial_from_json(data: dict[str, Any]) -> Trial:
         rollout_seconds=float(data.get("rollout_seconds", 0.0)),
         parameters=dict(data.get("parameters", {})),
         components=None if data.get("components") is None else {str(k): float(v) for k, v in data["components"].items()},
+        routes=None if data.get("routes") is None else {str(k): float(v) for k, v in data["routes"].items()},
     )
 
 

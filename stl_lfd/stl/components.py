@@ -11,6 +11,17 @@
 The robustness of `a & b & c` is a fixed function of the robustness of a, b and c (their
 minimum, or the n-ary conjunction of the new robustness), so `compose` of the parts' values is
 exactly the spec's robustness. A spec that is not a conjunction at the top is one part.
+
+A part that holds a disjunction always, `G[a, b] (A -> B)` or `G[a, b] (A | B)`, also has
+*routes*: `G[a, b] B` and `G[a, b] !A` (or `G[a, b] A`, `G[a, b] B`), each of which implies the
+part. While the part is violated its robustness can lead away from satisfaction (in
+`G (HOLDER -> force < 2)`, pushing on the holder, it is the depth inside `HOLDER`, which is
+least at the walls, away from the hole), and a route (`G force < 2`, the largest force) says
+how far each trial was from satisfying it another way.
+
+    >>> parts = split_spec(parse("F x > 0.5 & G (x > 1 -> y < 2)"))
+    >>> [(route.part, route.name) for route in parts.routes]
+    [(1, 'G !x > 1'), (1, 'G y < 2')]
 """
 
 from __future__ import annotations
@@ -27,6 +38,21 @@ from stl_lfd.stl.robustness import Robustness, Semantics, SemanticsName, compile
 
 
 @dataclass(frozen=True)
+class Route:
+    """A formula that implies part `part` of a spec (see the module's docstring).
+
+    Attributes:
+        part: index of the part in `SpecParts.names`.
+        name: the route's text.
+        function: its robustness function, in the parts' semantics.
+    """
+
+    part: int
+    name: str
+    function: Robustness
+
+
+@dataclass(frozen=True)
 class SpecParts:
     """The top-level conjuncts of a specification and how they compose.
 
@@ -34,11 +60,13 @@ class SpecParts:
         names: `m` texts of the conjuncts as written (defined names kept), unique.
         functions: `m` robustness functions, one per conjunct.
         semantics: the semantics of the functions and of `compose`.
+        routes: formulas that each imply one of the parts (see the module's docstring).
     """
 
     names: tuple[str, ...]
     functions: tuple[Robustness, ...]
     semantics: Semantics
+    routes: tuple[Route, ...] = ()
 
     @property
     def signals(self) -> frozenset[str]:
@@ -48,6 +76,10 @@ class SpecParts:
     def __call__(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> np.ndarray:
         """`m` robustness values of the parts at the first sample (`B x m` for a batch)."""
         return np.stack([np.asarray(function(signals, times), dtype=float) for function in self.functions], axis=-1)
+
+    def route_values(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> dict[str, float]:
+        """The robustness of each route (its text -> value) at the first sample."""
+        return {route.name: float(route.function(signals, times)) for route in self.routes}
 
     def compose(self, values: ArrayLike) -> float | np.ndarray:
         """The spec's robustness from its parts' values: `m` -> float, or `... x m` -> `...`."""
@@ -66,15 +98,41 @@ def split_spec(spec: ast.Spec | ast.Formula, semantics: SemanticsName | Semantic
     operands = top.operands if isinstance(top, ast.And) else (top,)
     names = _unique([format_formula(operand) for operand in operands])
     functions = tuple(compile_spec(replace(spec, formula=operand), semantics, source=source) for operand in operands)
-    return SpecParts(names, functions, semantics)
+    routes = tuple(
+        Route(index, format_formula(route), compile_spec(replace(spec, formula=route), semantics, source=source))
+        for index, operand in enumerate(operands)
+        for route in _routes(spec, operand)
+    )
+    return SpecParts(names, functions, semantics, routes)
 
 
-def _follow_names(spec: ast.Spec) -> ast.Formula:
-    formula, seen = spec.formula, set()
+def _routes(spec: ast.Spec, part: ast.Formula) -> list[ast.Formula]:
+    """`G[a, b] D` for each disjunct `D` of a part `G[a, b] (D1 | D2 | ...)` (an implication
+    `A -> B` is `!A | B`); none for other parts."""
+    part = _follow(spec, part)
+    if not isinstance(part, ast.Always):
+        return []
+    child = _follow(spec, part.child)
+    if isinstance(child, ast.Implies):
+        disjuncts = (ast.Not(child.left), child.right)
+    elif isinstance(child, ast.Or):
+        disjuncts = child.operands
+    else:
+        return []
+    return [ast.Always(disjunct, part.interval) for disjunct in disjuncts]
+
+
+def _follow(spec: ast.Spec, formula: ast.Formula) -> ast.Formula:
+    """`formula` with defined names followed to what they stand for."""
+    seen = set()
     while isinstance(formula, ast.Ref) and formula.name not in seen:
         seen.add(formula.name)
         formula = spec.definition(formula.name)
     return formula
+
+
+def _follow_names(spec: ast.Spec) -> ast.Formula:
+    return _follow(spec, spec.formula)
 
 
 def _unique(names: list[str]) -> tuple[str, ...]:

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import torch
 
-from stl_lfd.optim.composite import TrustRegion, compose, trust_region_length
+from stl_lfd.optim.composite import TrustRegion, compose, propose_composite, trust_region_length
 from stl_lfd.optim.loop import Outcome, Trial, best_trial, part_observations, run_trials
 from stl_lfd.optim.task import Optimizer
 from stl_lfd.stl import Semantics, parse, split_spec
@@ -94,3 +94,37 @@ def test_a_spec_that_is_not_a_conjunction_runs_through_the_same_path():
     assert [trial.phase for trial in history][:5] == ["sobol"] * 4 + ["stl"]
     assert set(trial.phase for trial in history[5:]) <= {"stl", "explore"}
     assert best_trial(history).robustness > max(trial.robustness for trial in history[:4])
+
+
+# A part that misleads while violated: `G (a > 0 -> b > 0)` is satisfied only for x[0] near
+# 0.1, and elsewhere its robustness grows towards x[0] = 1; its route `G b > 0` is a bump at
+# 0.1 (in other units). The other part always holds.
+ROUTED = split_spec(parse("F c > 0 & G (a > 0 -> b > 0)"), "classic")
+
+
+def misleading_parts(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`n x 2` parts and `n x 2` routes at `n x 4` points."""
+    route = 10 * (np.exp(-0.5 * ((x[:, 0] - 0.1) / 0.1) ** 2) - 0.9)  # positive within 0.046 of 0.1
+    part = np.where(route > 0, route, -0.01 - 0.1 * (1.0 - x[:, 0]))
+    return np.column_stack([np.full(len(x), 0.3), part]), np.column_stack([-0.5 - 0.1 * x[:, 1], route])
+
+
+def test_a_route_leads_the_search_where_the_misleading_part_would_not():
+    assert [(route.part, route.name) for route in ROUTED.routes] == [(1, "G !a > 0"), (1, "G b > 0")]
+    rng = np.random.default_rng(1)
+    X = np.column_stack([[0.02, 0.25, 0.4, 0.55, 0.7, 0.85, 0.95, 0.99], rng.random((8, 3))])
+    parts, routes = misleading_parts(X)
+    Y = parts.min(axis=1)
+    assert np.max(Y) < 0 and np.argmax(Y) == 7  # violated, best at the far end
+    for seed in range(3):
+        blind = propose_composite(X, parts, Y, BOUNDS, Semantics("classic"), 8, seed)
+        routed = propose_composite(X, parts, Y, BOUNDS, Semantics("classic"), 8, seed, routes=(routes, (1, 1)))
+        assert blind[0] > 0.6, seed  # the trust region around the best trial, led on by the part
+        assert routed[0] < 0.2, seed  # towards the route's bump, which the trust region excludes
+
+
+def test_a_part_sample_is_raised_to_its_routes():
+    from stl_lfd.optim.composite import _through_routes
+
+    samples = torch.tensor([[0.1, -0.2, 0.3, -0.5], [0.1, -0.2, -0.4, -0.1]], dtype=torch.float64)  # 2 parts, 2 routes of part 1
+    np.testing.assert_array_equal(_through_routes(samples, 2, (1, 1)).numpy(), [[0.1, 0.3], [0.1, -0.1]])

@@ -167,3 +167,31 @@ def test_recorded_parts_compose_to_the_recorded_robustness_exactly(tmp_path, lea
         assert list(trial["components"]) == list(parts.names)
         assert parts.compose(list(trial["components"].values())) == trial["robustness"]
     assert parts.compose(list(summary.initial_components.values())) == summary.initial_robustness
+
+
+@pytest.mark.slow
+def test_routes_are_recorded_with_each_trial_and_a_resumed_run_proposes_the_same_points(tmp_path, learned_model_file):
+    from stl_lfd.signals import read_signal_csv
+    from stl_lfd.stl import Spec
+
+    spec = tmp_path / "implication.stl"
+    spec.write_text("F[0, 20] x > 0.45 & G (y > 0.1 -> z < 0.35)\n")
+    task = load_task(small_task(tmp_path, learned_model_file)).with_overrides(spec=spec, method="stl")
+    optimise(start_run(task, tmp_path / "whole"))
+    trials = [json.loads(line) for line in (tmp_path / "whole" / "trials.jsonl").read_text().splitlines()]
+    routes = {name: Spec.parse(name) for name in ("G !y > 0.1", "G z < 0.35")}
+    for trial in trials:
+        table = read_signal_csv(tmp_path / "whole" / "signals" / f"trial-{trial['trial']:04d}.csv")
+        expected = {name: route.robustness(table.columns, table.times) for name, route in routes.items()}
+        assert trial["routes"] == pytest.approx(expected, abs=1e-9)  # the CSV holds rounded signals
+    assert [trial.routes for trial in RunDirectory(tmp_path / "whole").trials()] == [trial["routes"] for trial in trials]
+    optimise(start_run(task.with_overrides(trials=4), tmp_path / "resumed"))
+    optimise(resume_run(tmp_path / "resumed", trials=5))
+    resumed = [json.loads(line) for line in (tmp_path / "resumed" / "trials.jsonl").read_text().splitlines()]
+    assert [trial["x"] for trial in resumed] == [trial["x"] for trial in trials]
+
+
+@pytest.mark.slow
+def test_a_spec_without_routes_records_none(tmp_path, learned_model_file):
+    optimise(start_run(load_task(small_task(tmp_path, learned_model_file)), tmp_path / "run"))
+    assert all("routes" not in json.loads(line) for line in (tmp_path / "run" / "trials.jsonl").read_text().splitlines())
