@@ -118,9 +118,10 @@ def propose_composite(
         route_values, route_parts = routes if routes is not None else (np.empty((len(X), 0)), ())
         model = fit_multi_output_gp(unit, np.hstack([parts, route_values]))
         posterior = PartsPosterior(model)
-        box = _trust_box(unit[int(np.argmax(Y))], trust_region_length(Y, initial))
         if route_parts and np.max(Y) <= 0:
-            box = np.array([np.zeros(unit.shape[1]), np.ones(unit.shape[1])])
+            box = _trust_box(np.full(unit.shape[1], 0.5), 1.0)  # the whole unit cube
+        else:
+            box = _trust_box(unit[int(np.argmax(Y))], trust_region_length(Y, initial))
         executing = [] if pending is None else list((pending - bounds[0]) / (bounds[1] - bounds[0]))
         chosen: list[np.ndarray] = []
         for index in range(count):

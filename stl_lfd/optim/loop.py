@@ -167,7 +167,7 @@ def _composite_points(
     if composite is None:  # trials recorded without their parts (an older run): the robustness alone
         composite, semantics = Y[:, None], Semantics("classic")
     groups = getattr(parts, "groups", 1) if composite.shape[1] > 1 else 1
-    routes = getattr(parts, "routes", ()) if parts is not None and composite.shape[1] == len(parts.names) else ()
+    routes = getattr(parts, "routes", ())  # none without parts, or with several placements
     route_values = part_observations(history, tuple(route.name for route in routes), "routes") if routes else None
     points = propose_composite(
         X, composite, Y, bounds, semantics, optimizer.initial, optimizer.seed + len(history), count, pending if len(pending) else None, groups,

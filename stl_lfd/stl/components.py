@@ -94,7 +94,7 @@ def split_spec(spec: ast.Spec | ast.Formula, semantics: SemanticsName | Semantic
     if not isinstance(semantics, Semantics):
         semantics = Semantics(semantics, nu)
     spec = spec if isinstance(spec, ast.Spec) else ast.Spec((), spec)
-    top = _follow_names(spec)
+    top = _follow(spec, spec.formula)
     operands = top.operands if isinstance(top, ast.And) else (top,)
     names = _unique([format_formula(operand) for operand in operands])
     functions = tuple(compile_spec(replace(spec, formula=operand), semantics, source=source) for operand in operands)
@@ -129,10 +129,6 @@ def _follow(spec: ast.Spec, formula: ast.Formula) -> ast.Formula:
         seen.add(formula.name)
         formula = spec.definition(formula.name)
     return formula
-
-
-def _follow_names(spec: ast.Spec) -> ast.Formula:
-    return _follow(spec, spec.formula)
 
 
 def _unique(names: list[str]) -> tuple[str, ...]:

@@ -140,7 +140,10 @@ def test_a_bad_executor_is_a_clear_error(tmp_path, monkeypatch, mode, error, mes
     with pytest.raises(error, match=message):
         execute(reference, load_scene("free_space"), backend, 50)
     if mode == "hang":  # the executor's own child was stopped with it
-        assert _dies(int((tmp_path / "child.pid").read_text()))
+        from tests.processes import wait_for
+
+        child = int((tmp_path / "child.pid").read_text())
+        wait_for(lambda: not _alive(child), timeout=10.0)  # a SIGKILL is delivered asynchronously
 
 
 @pytest.mark.slow
@@ -156,19 +159,6 @@ def test_a_failed_execution_fails_its_trial_and_the_run_goes_on_and_resumes(tmp_
 
     optimise(resume_run(tmp_path / "run", trials=3))
     assert [trial["status"] for trial in trials_of(tmp_path / "run")] == ["failed", "ok", "ok"]
-
-
-def _dies(pid, timeout=10.0):
-    """Whether process `pid` is gone within `timeout` s: a SIGKILL sent to it is delivered
-    asynchronously, so it may still run for a moment after the kill returns."""
-    import time
-
-    deadline = time.monotonic() + timeout
-    while _alive(pid):
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.05)
-    return True
 
 
 def _alive(pid):
@@ -235,5 +225,5 @@ def test_ctrl_c_stops_the_executor_with_its_children_and_keeps_the_trials(tmp_pa
     _, err = interrupt(process)
     assert process.returncode == -signal.SIGINT, err
     assert "the finished trials are kept" in err and "Traceback" not in err
-    assert _dies(child)
+    wait_for(lambda: not _alive(child), timeout=10.0)
     assert [trial["trial"] for trial in trials_of(tmp_path / "run")] == [1, 2]
