@@ -6,8 +6,10 @@ How an example's output is compared with what the command printed (stdout and st
 - `# (stderr)` at the end of a line is a comment;
 - whitespace runs count as one space;
 - numbers must be equal as written, except a number written with a trailing `...` (a prefix
-  of the printed one) and durations (a number followed by `s` or `x real time`), which vary
-  from machine to machine.
+  of the printed one), a number written with a trailing `~` (one that the Gaussian process's
+  proposals decide, which differs between processors of different kinds: any number of the
+  same sign), and durations (a number followed by `s` or `x real time`), which vary from
+  machine to machine.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import pytest
 
 from tests.conftest import ROOT
 
-NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?:\.\.\.)?")
+NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?(?:\.\.\.|~)?")
 DURATION_AFTER = re.compile(r"^ ?(s\b|x real time)")
 STANDALONE_COMMANDS = ("stlopt optimize", "stlopt replay", "stlopt sweep")  # write nothing a later example reads
 # Examples that learn, execute or start Python take seconds each: marked slow (left out by `-m "not slow"`).
@@ -71,7 +73,10 @@ def line_matches(expected: str, printed: str) -> bool:
         following = want[index + 1] if index + 1 < len(want) else ""
         if DURATION_AFTER.match(following):
             continue
-        if token.endswith("..."):
+        if token.endswith("~"):
+            if token[0] in "+-" and actual[0] != token[0]:
+                return False
+        elif token.endswith("..."):
             if not actual.startswith(token[:-3]):
                 return False
         elif token != actual:
@@ -104,6 +109,9 @@ def test_the_readme_has_console_examples_and_the_matcher_works():
     assert len(EXAMPLES) >= 8
     assert line_matches("-0.03572971192...", "-0.035729711921")
     assert not line_matches("-0.0357...", "-0.0358")
+    assert line_matches("best: trial 11~, robustness +0.02205~", "best: trial 31, robustness +0.02254")
+    assert not line_matches("robustness +0.02205~", "robustness -0.00254")
+    assert not line_matches("robustness +0.02205~ (satisfied)", "robustness +0.02205 (violated)")
     assert line_matches("rollout: 22.00 s simulated in 0.56 s (39x real time)", "rollout: 22.00 s simulated in 1.52 s (15x real time)")
     assert not line_matches("tracking error RMS 0.07 mm", "tracking error RMS 0.06 mm")
     assert output_matches(["a 1", "..."], "a 1\nb 2\n", "") == ""
