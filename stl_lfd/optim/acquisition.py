@@ -100,9 +100,11 @@ def _maximise(X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, method: str, xi:
     return np.clip(candidate, bounds[0], bounds[1])
 
 
-def maximise_acquisition(acquisition, box: np.ndarray, restarts: int, raw_samples: int, seed: int, iterations: int | None = None) -> np.ndarray:
+def maximise_acquisition(acquisition, box: np.ndarray, restarts: int, raw_samples: int, seed: int, iterations: int | None = None, starts=None) -> np.ndarray:
     """The maximiser (`d`) of a q = 1 acquisition function inside `box` (`2 x d`): BoTorch's
-    multi-start L-BFGS-B, `iterations` per restart (None: BoTorch's default)."""
+    multi-start L-BFGS-B, `iterations` per restart (None: BoTorch's default), from `restarts`
+    starts chosen among `raw_samples` random points, plus the `k x 1 x d` tensor `starts` if
+    given."""
     import torch
     from botorch.optim import optimize_acqf
 
@@ -110,7 +112,13 @@ def maximise_acquisition(acquisition, box: np.ndarray, restarts: int, raw_sample
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # restarts that end on flat regions warn
         candidate, _ = optimize_acqf(
-            acquisition, bounds=torch.as_tensor(box, dtype=torch.float64), q=1, num_restarts=restarts, raw_samples=raw_samples, options=options
+            acquisition,
+            bounds=torch.as_tensor(box, dtype=torch.float64),
+            q=1,
+            num_restarts=restarts + (0 if starts is None else len(starts)),
+            raw_samples=raw_samples,
+            options=options,
+            batch_initial_conditions=starts,
         )
     return candidate.detach().numpy()[0]
 

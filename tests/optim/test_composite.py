@@ -128,3 +128,66 @@ def test_a_part_sample_is_raised_to_its_routes():
 
     samples = torch.tensor([[0.1, -0.2, 0.3, -0.5], [0.1, -0.2, -0.4, -0.1]], dtype=torch.float64)  # 2 parts, 2 routes of part 1
     np.testing.assert_array_equal(_through_routes(samples, 2, (1, 1)).numpy(), [[0.1, 0.3], [0.1, -0.1]])
+
+
+def _two_bumps(narrow_center: np.ndarray):
+    """An acquisition (`b x 1 x d` -> `b`) with a broad low bump at 0.8 and a narrow high one
+    at `narrow_center`, in the unit cube."""
+    center = torch.as_tensor(narrow_center, dtype=torch.float64)
+
+    def acquisition(X):
+        X = X[..., 0, :]
+        broad = 0.5 * torch.exp(-0.5 * ((X - 0.8) / 0.5).square().sum(-1))
+        narrow = torch.exp(-0.5 * ((X - center) / 0.08).square().sum(-1))
+        return broad + narrow
+
+    return acquisition
+
+
+def test_starts_near_an_anchor_find_a_narrow_maximum_that_random_starts_miss():
+    from stl_lfd.optim.acquisition import maximise_acquisition
+    from stl_lfd.optim.composite import RAW_SAMPLES, RESTARTS, anchored_starts
+
+    dimensions = 12
+    box = np.vstack([np.zeros(dimensions), np.ones(dimensions)])
+    narrow = np.full(dimensions, 0.2)
+    acquisition = _two_bumps(narrow)
+    anchor = narrow + np.random.default_rng(0).normal(0, 0.05, dimensions)  # a trial near it
+    for seed in range(3):
+        blind = maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed)
+        starts = anchored_starts(acquisition, anchor[None], box, seed)
+        anchored = maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed, starts=starts)
+        assert np.linalg.norm(blind - 0.8) < 0.1, seed  # the broad bump: no random start came near the narrow one
+        assert np.linalg.norm(anchored - narrow) < 0.01, seed
+
+
+def test_the_best_trial_of_each_output_is_an_anchor_once():
+    from stl_lfd.optim.composite import best_trials
+
+    unit = np.arange(8.0).reshape(4, 2)
+    values = np.array([[0.1, -3.0, 5.0], [0.4, -1.0, 2.0], [0.2, -2.0, 9.0], [0.3, -4.0, 1.0]])  # bests at 1, 1, 2
+    np.testing.assert_array_equal(best_trials(values, unit), unit[[1, 2]])
+
+
+def test_a_route_nearly_holding_at_one_trial_draws_the_search_in_many_dimensions():
+    # 12 parameters; the route holds only within about 0.05 of `hole`, near a corner of the
+    # box, and the third trial came close (-0.65 against about -9 elsewhere); the part
+    # misleads towards x[0] = 1 as above. Without starts near that trial, the search of seed
+    # 0 ends 1.5 away from it.
+    dimensions = 12
+    rng = np.random.default_rng(3)
+    hole = np.full(dimensions, 0.05)
+    X = rng.random((8, dimensions))
+    X[2] = hole + 0.06 / np.sqrt(dimensions)  # 0.06 away: the route at -0.65
+
+    def parts_at(x):
+        route = 10 * (np.exp(-0.5 * (np.linalg.norm(x - hole, axis=1) / 0.1) ** 2) - 0.9)
+        part = np.where(route > 0, route, -0.01 - 0.1 * (1.0 - x[:, 0]))
+        return np.column_stack([np.full(len(x), 0.3), part]), np.column_stack([-0.5 - 0.1 * x[:, 1], route])
+
+    parts, routes = parts_at(X)
+    assert -1 < routes[2, 1] < 0 and np.all(np.delete(routes[:, 1], 2) < -8.9)
+    bounds = np.vstack([np.zeros(dimensions), np.ones(dimensions)])
+    for seed in range(3):
+        point = propose_composite(X, parts, parts.min(axis=1), bounds, Semantics("classic"), 8, seed, routes=(routes, (1, 1)))
+        assert np.linalg.norm(point - X[2]) < 0.3, seed
