@@ -106,8 +106,9 @@ def propose_composite(
             part for each (`SpecParts.routes`). Each gets its own GP output, and a sample of a
             part is the largest of its own and its routes' samples: a part holds if a route
             does. While the spec is violated the search then spans the whole box, not the
-            trust region: the part's own robustness may lead away from where a route is
-            close to holding.
+            trust region (the part's own robustness may lead away from where a route is
+            close to holding), and the acquisition's optimiser also starts near the trial
+            where each part or route was best (`anchored_starts`).
 
     Returns:
         `d` next point, or `count x d` points when `count > 1`.
