@@ -94,7 +94,19 @@ def run_one(problem: str, method: str, seed: int) -> dict:
         "rollout_seconds": statistics.median(trial["rollout_seconds"] for trial in trials),
         "robustness": robustness,
         "best_x": best_x,
+        "processor": processor(),
     }
+
+
+def processor() -> str:
+    """The processor's model name, and whether it has AVX-512: model-based trials depend on
+    the kind of processor (torch picks its kernels by the vector instructions there are)."""
+    try:
+        info = Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return "unknown"
+    name = next((line.split(":", 1)[1].strip() for line in info.splitlines() if line.startswith("model name")), "unknown")
+    return f"{name}, AVX-512" if " avx512f" in info else name
 
 
 def _one_thread() -> None:
