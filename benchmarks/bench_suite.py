@@ -260,8 +260,8 @@ def _search(job: tuple[str, int]) -> dict:
     return random_search(*job)
 
 
-def run_suite(problems: list[str], methods: list[str], seeds: list[int], jobs: int) -> None:
-    done = {(r["problem"], r["method"], r["seed"]) for r in _recorded(RESULTS)}
+def run_suite(problems: list[str], methods: list[str], seeds: list[int], jobs: int, results: Path = RESULTS) -> None:
+    done = {(r["problem"], r["method"], r["seed"]) for r in _recorded(results)}
     # seed by seed, so that a suite stopped early has whole seeds for every problem and method
     todo = [(p, m, s) for s in seeds for p in problems for m in methods if (p, m, s) not in done]
     console = Console(stderr=True)
@@ -270,15 +270,15 @@ def run_suite(problems: list[str], methods: list[str], seeds: list[int], jobs: i
         if "error" in record:  # one broken run must not lose the others
             console.print(f"[red]{job} failed: {record['error']}")
             continue
-        _append(RESULTS, record)
+        _append(results, record)
         console.print(f"{count}/{len(todo)} {job}: first satisfied {record['first_satisfied']}, best {record['best_robustness']:.4f}")
 
 
-def summarise(problems: list[str], methods: list[str], seeds: list[int] | None = None) -> list[dict]:
+def summarise(problems: list[str], methods: list[str], seeds: list[int] | None = None, results: Path = RESULTS) -> list[dict]:
     """One row per (problem, method) of the recorded runs, then one `all` row per method over
     the problems with a solution shown (a satisfying point in their search). Only the (problem,
     seed) pairs that every method has finished count, so methods are compared on the same seeds."""
-    records = [r for r in _recorded(RESULTS) if r["problem"] in problems and r["method"] in methods and (seeds is None or r["seed"] in seeds)]
+    records = [r for r in _recorded(results) if r["problem"] in problems and r["method"] in methods and (seeds is None or r["seed"] in seeds)]
     finished: dict[tuple[str, int], set[str]] = {}
     for r in records:
         finished.setdefault((r["problem"], r["seed"]), set()).add(r["method"])
@@ -315,10 +315,10 @@ def summarise(problems: list[str], methods: list[str], seeds: list[int] | None =
     return rows
 
 
-def paired_firsts(problems: list[str], methods: list[str], seeds: list[int] | None = None, reference: str = "stl") -> list[dict]:
+def paired_firsts(problems: list[str], methods: list[str], seeds: list[int] | None = None, reference: str = "stl", results: Path = RESULTS) -> list[dict]:
     """Median trials to first satisfaction of `reference` and of each other method, over the
     (problem, seed) pairs that both satisfy."""
-    records = {(r["problem"], r["method"], r["seed"]): r for r in _recorded(RESULTS) if seeds is None or r["seed"] in seeds}
+    records = {(r["problem"], r["method"], r["seed"]): r for r in _recorded(results) if seeds is None or r["seed"] in seeds}
     rows = []
     for method in methods:
         if method == reference:
@@ -338,15 +338,15 @@ def paired_firsts(problems: list[str], methods: list[str], seeds: list[int] | No
 COLUMNS = ("problem", "budget", "search best", "method", "seeds", "satisfied", "median first", "median best", "optimiser s/trial", "rollout s/trial")
 
 
-def print_table(problems: list[str], methods: list[str], seeds: list[int] | None = None, markdown: bool = False) -> None:
-    rows = summarise(problems, methods, seeds)
+def print_table(problems: list[str], methods: list[str], seeds: list[int] | None = None, markdown: bool = False, results: Path = RESULTS) -> None:
+    rows = summarise(problems, methods, seeds, results)
     if markdown:
         print("| " + " | ".join(COLUMNS) + " |")
         print("|" + "---|" * len(COLUMNS))
         for row in rows:
             print("| " + " | ".join(row.get(column, "") for column in COLUMNS) + " |")
         print("\nMedian first satisfied trial on the pairs both satisfy:\n")
-        for row in paired_firsts(problems, methods, seeds):
+        for row in paired_firsts(problems, methods, seeds, results=results):
             ours, theirs = row["reference"], row["against"]
             print(f"- {ours} against {theirs}: {row['pairs']} pairs, {ours} {row[ours]:g}, {theirs} {row[theirs]:g}")
         return
@@ -370,6 +370,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--table", action="store_true", help="only print the table of recorded runs")
     parser.add_argument("--search", type=int, default=0, help="random points per problem for the existence check")
     parser.add_argument("--markdown", action="store_true", help="print the table in Markdown")
+    parser.add_argument(
+        "--results",
+        type=Path,
+        default=RESULTS,
+        help="the records to extend and print (default results/suite.jsonl; another machine's go in a file of their own)",
+    )
     args = parser.parse_args(argv)
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     if args.search:
@@ -377,8 +383,8 @@ def main(argv: list[str] | None = None) -> None:
             _append(SEARCH_RESULTS, record)
             Console(stderr=True).print(record)
     elif not args.table:
-        run_suite(args.problems, args.methods, seeds, args.jobs)
-    print_table(args.problems, args.methods, seeds, args.markdown)
+        run_suite(args.problems, args.methods, seeds, args.jobs, args.results)
+    print_table(args.problems, args.methods, seeds, args.markdown, args.results)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,31 @@
+"""The optimiser suite's table from records (no runs)."""
+
+from __future__ import annotations
+
+import json
+
+from benchmarks.bench_suite import paired_firsts, summarise
+
+
+def _record(problem: str, method: str, seed: int, first: int | None) -> dict:
+    return {
+        "problem": problem,
+        "method": method,
+        "seed": seed,
+        "budget": 32,
+        "first_satisfied": first,
+        "best_robustness": 0.01 if first else -0.01,
+        "optimizer_seconds": 0.5,
+        "rollout_seconds": 0.1,
+    }
+
+
+def test_a_records_file_of_its_own_gives_its_own_table(tmp_path):
+    records = [_record("avoid", "stl", 0, 3), _record("avoid", "stl", 1, None), _record("avoid", "pi", 0, 5), _record("avoid", "pi", 1, 9)]
+    path = tmp_path / "suite-other-machine.jsonl"
+    path.write_text("".join(json.dumps(record) + "\n" for record in records))
+    rows = {(row["problem"], row["method"]): row for row in summarise(["avoid"], ["stl", "pi"], results=path)}
+    assert rows[("avoid", "stl")]["satisfied"] == "1/2" and rows[("avoid", "pi")]["satisfied"] == "2/2"
+    assert rows[("avoid", "pi")]["median first"] == "7"
+    assert rows[("all", "stl")]["satisfied"] == "1/2 (50 %)"  # avoid has a solution shown (results/search.jsonl)
+    assert paired_firsts(["avoid"], ["stl", "pi"], results=path) == [{"reference": "stl", "against": "pi", "pairs": 1, "stl": 3, "pi": 5}]
