@@ -110,6 +110,14 @@ def _root(
     """Adapt demonstrated robot skills to Signal Temporal Logic requirements."""
 
 
+def _one_blas_thread() -> None:
+    """One OpenBLAS thread for a command that does no linear algebra, unless the user chose:
+    loading numpy otherwise starts one per core, which spin for a while (about 0.08 s of CPU
+    on two cores, a third of a small `stlopt robustness`). Too late once numpy is loaded."""
+    if "numpy" not in sys.modules:
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
 @app.command(cls=_PlainUsage)
 def robustness(
     spec: Path = typer.Argument(..., metavar="SPEC", help="STL specification file (.stl)."),
@@ -128,6 +136,7 @@ def robustness(
     \b
         stlopt robustness specs/example.stl examples/s1.csv --semantics new --json
     """
+    _one_blas_thread()
     from stl_lfd.stl.evaluate import evaluate_file
 
     with user_errors():

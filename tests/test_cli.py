@@ -1,6 +1,9 @@
 """The command line: output on stdout, messages on stderr, exit codes, help for every command."""
 
 import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -116,3 +119,15 @@ def test_help_fits_80_columns_with_whole_examples_and_plain_types():
         assert docstring_examples, name
         for example in docstring_examples:
             assert any(line.strip() == example for line in lines), f"{name}: example split: {example}"
+
+
+@pytest.mark.parametrize("chosen, expected", [(None, 1), ("2", 2)])
+def test_robustness_loads_numpy_with_one_blas_thread_unless_the_user_chose(chosen, expected):
+    # the command's own start: `_one_blas_thread` runs before the evaluation loads numpy
+    code = (
+        "import stl_lfd.cli as cli; cli._one_blas_thread(); import numpy, threadpoolctl; "
+        "print(max(pool['num_threads'] for pool in threadpoolctl.threadpool_info() if pool['internal_api'] == 'openblas'))"
+    )
+    env = {name: value for name, value in os.environ.items() if name != "OPENBLAS_NUM_THREADS"} | ({"OPENBLAS_NUM_THREADS": chosen} if chosen else {})
+    printed = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env).stdout
+    assert int(printed) == expected
