@@ -99,8 +99,8 @@ def run_one(problem: str, method: str, seed: int) -> dict:
 
 
 def processor() -> str:
-    """The processor's model name, and whether it has AVX-512: model-based trials depend on
-    the kind of processor (torch picks its kernels by the vector instructions there are)."""
+    """The processor's model name, and whether it has AVX-512: runs depend on the kind of
+    processor (numpy and torch pick their kernels by the vector instructions there are)."""
     try:
         info = Path("/proc/cpuinfo").read_text()
     except OSError:

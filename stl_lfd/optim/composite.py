@@ -119,13 +119,13 @@ def propose_composite(
         torch.manual_seed(seed)
         unit = (X - bounds[0]) / (bounds[1] - bounds[0])
         route_values, route_parts = routes if routes is not None else (np.empty((len(X), 0)), ())
-        model = fit_multi_output_gp(unit, np.hstack([parts, route_values]))
+        outputs = np.hstack([parts, route_values])
+        model = fit_multi_output_gp(unit, outputs)
         posterior = PartsPosterior(model)
         if route_parts and np.max(Y) <= 0:
-            box = _trust_box(np.full(unit.shape[1], 0.5), 1.0)  # the whole unit cube
+            box, anchors = _trust_box(np.full(unit.shape[1], 0.5), 1.0), best_trials(outputs, unit)  # the whole unit cube
         else:
-            box = _trust_box(unit[int(np.argmax(Y))], trust_region_length(Y, initial))
-        anchors = best_trials(np.hstack([parts, route_values]), unit) if route_parts and np.max(Y) <= 0 else None
+            box, anchors = _trust_box(unit[int(np.argmax(Y))], trust_region_length(Y, initial)), None
         executing = [] if pending is None else list((pending - bounds[0]) / (bounds[1] - bounds[0]))
         chosen: list[np.ndarray] = []
         for index in range(count):
@@ -279,7 +279,7 @@ def anchored_starts(acquisition, anchors: np.ndarray, box: np.ndarray, seed: int
     generator = torch.Generator().manual_seed(seed)
     center = torch.as_tensor(anchors, dtype=torch.float64)[:, None, :]  # k x 1 x d
     draws = center + ANCHOR_SPREAD * torch.randn(len(anchors), AROUND_ANCHOR, anchors.shape[1], generator=generator, dtype=torch.float64)
-    draws = torch.maximum(torch.minimum(draws, torch.as_tensor(box[1])), torch.as_tensor(box[0]))  # k x A x d
+    draws = draws.clamp(torch.as_tensor(box[0]), torch.as_tensor(box[1]))  # k x A x d
     with torch.no_grad():
         values = acquisition(draws.reshape(-1, 1, anchors.shape[1])).reshape(len(anchors), AROUND_ANCHOR)
     return draws[torch.arange(len(anchors)), values.argmax(dim=-1)][:, None, :]
