@@ -15,6 +15,7 @@ that a resumed run proposes exactly the points an uninterrupted one would.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -83,6 +84,7 @@ def propose_composite(
     pending: np.ndarray | None = None,
     groups: int = 1,
     routes: tuple[np.ndarray, tuple[int, ...]] | None = None,
+    features: Callable | None = None,
 ) -> np.ndarray:
     """The next point (or batch of `count` points) of composite BO.
 
@@ -109,6 +111,8 @@ def propose_composite(
             trust region (the part's own robustness may lead away from where a route is
             close to holding), and the acquisition's optimiser also starts near the trial
             where each part or route was best (`anchored_starts`).
+        features: what the GP sees of `b x d` points in the unit cube of `bounds` (a torch
+            tensor -> `b x f`; `features.PathFeatures`); None: the points themselves.
 
     Returns:
         `d` next point, or `count x d` points when `count > 1`.
@@ -120,7 +124,8 @@ def propose_composite(
         unit = (X - bounds[0]) / (bounds[1] - bounds[0])
         route_values, route_parts = routes if routes is not None else (np.empty((len(X), 0)), ())
         outputs = np.hstack([parts, route_values])
-        model = fit_multi_output_gp(unit, outputs)
+        encode = features if features is not None else (lambda points: points)
+        model = fit_multi_output_gp(encode(torch.as_tensor(unit, dtype=torch.float64)).numpy(), outputs)
         posterior = PartsPosterior(model)
         if route_parts and np.max(Y) <= 0:
             box, anchors = _trust_box(np.full(unit.shape[1], 0.5), 1.0), best_trials(outputs, unit)  # the whole unit cube
@@ -130,9 +135,9 @@ def propose_composite(
         chosen: list[np.ndarray] = []
         for index in range(count):
             if executing or chosen:
-                posterior = PartsPosterior(model).with_pending(torch.as_tensor(np.array(executing + chosen), dtype=torch.float64))
+                posterior = PartsPosterior(model).with_pending(encode(torch.as_tensor(np.array(executing + chosen), dtype=torch.float64)))
             acquisition = composed_log_ei(
-                model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed + index, posterior, groups, route_parts
+                model, float(np.max(Y)), float(np.std(Y)) or 1.0, semantics, parts.shape[1], seed + index, posterior, groups, route_parts, features
             )
             starts = None if anchors is None else anchored_starts(acquisition, anchors, box, seed + index)
             chosen.append(maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed + index, starts=starts))
@@ -150,6 +155,7 @@ def composed_log_ei(
     posterior: "PartsPosterior | None" = None,
     groups: int = 1,
     route_parts: tuple[int, ...] = (),
+    features: Callable | None = None,
 ):
     """Log expected improvement of the composed robustness over `best`, by quasi-Monte Carlo.
 
@@ -162,7 +168,7 @@ def composed_log_ei(
     (softplus with temperature `0.01 scale`) and averaged in log space, so that the acquisition
     keeps a gradient far from improvement. The model's outputs after the first `parts` are
     routes: output `parts + k` implies part `route_parts[k]`, whose sample is raised to the
-    route's where that is larger.
+    route's where that is larger. With `features`, the model's inputs are `features(X)`.
     """
     import math
 
@@ -174,10 +180,11 @@ def composed_log_ei(
     normal = torch.distributions.Normal(0.0, 1.0).icdf(unit.clamp(1e-6, 1 - 1e-6))  # S x m
     temperature = 0.01 * scale
     posterior = posterior if posterior is not None else PartsPosterior(model)
+    encode = features if features is not None else (lambda points: points)
 
     class ComposedLogEI(AcquisitionFunction):
         def forward(self, X):  # b x 1 x d -> b
-            mean, std = posterior(X[..., 0, :])  # b x m each
+            mean, std = posterior(encode(X[..., 0, :]))  # b x m each
             samples = mean.unsqueeze(-2) + std.unsqueeze(-2) * normal  # b x S x (m + r)
             samples = _through_routes(samples, parts, route_parts)  # b x S x m
             improvement = (compose(samples, semantics, groups) - best) / temperature  # b x S

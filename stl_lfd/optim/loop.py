@@ -76,11 +76,17 @@ class Outcome:
 
 
 def next_point(
-    history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None = None, initial_design: np.ndarray | None = None
+    history: list[Trial],
+    bounds: np.ndarray,
+    optimizer: Optimizer,
+    parts: SpecParts | None = None,
+    initial_design: np.ndarray | None = None,
+    features: Callable | None = None,
 ) -> tuple[np.ndarray, str]:
     """The point of trial `len(history) + 1` and the phase that chose it; method `stl` models
-    each of `parts`, the spec's top-level conjuncts."""
-    return next_points(history, bounds, optimizer, parts, initial_design=initial_design)[0]
+    each of `parts`, the spec's top-level conjuncts, as functions of `features` of the points
+    (`features.path_features`; None: the points themselves)."""
+    return next_points(history, bounds, optimizer, parts, initial_design=initial_design, features=features)[0]
 
 
 def next_points(
@@ -90,6 +96,7 @@ def next_points(
     parts: SpecParts | None = None,
     running: Sequence[np.ndarray] = (),
     initial_design: np.ndarray | None = None,
+    features: Callable | None = None,
 ) -> list[tuple[np.ndarray, str]]:
     """The points (and phases) of the trials from `len(history) + len(running) + 1` to the end
     of their batch; `running` are the points of the trials after `history` still executing;
@@ -123,7 +130,7 @@ def next_points(
             batch.append((sobol_points(bounds, start + 1, optimizer.seed)[start], "explore"))
             pending = np.vstack([pending, batch[0][0]])
         if end - start > len(batch):
-            points = _composite_points(before, X, Y, bounds, optimizer, parts, end - start - len(batch), pending)
+            points = _composite_points(before, X, Y, bounds, optimizer, parts, end - start - len(batch), pending, features)
             batch += [(point, "stl") for point in points]
         return batch[index - start :]
     return [(propose(X, Y, bounds, optimizer.method, optimizer.xi, optimizer.seed + index), optimizer.method)]
@@ -157,7 +164,15 @@ def batch_of(index: int, optimizer: Optimizer) -> tuple[int, int]:
 
 
 def _composite_points(
-    history: list[Trial], X: np.ndarray, Y: np.ndarray, bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None, count: int, pending: np.ndarray
+    history: list[Trial],
+    X: np.ndarray,
+    Y: np.ndarray,
+    bounds: np.ndarray,
+    optimizer: Optimizer,
+    parts: SpecParts | None,
+    count: int,
+    pending: np.ndarray,
+    features: Callable | None,
 ) -> np.ndarray:
     from stl_lfd.optim.composite import propose_composite
     from stl_lfd.stl import Semantics
@@ -171,7 +186,7 @@ def _composite_points(
     route_values = part_observations(history, tuple(route.name for route in routes), "routes") if routes else None
     points = propose_composite(
         X, composite, Y, bounds, semantics, optimizer.initial, optimizer.seed + len(history), count, pending if len(pending) else None, groups,
-        None if route_values is None else (route_values, tuple(route.part for route in routes)),
+        None if route_values is None else (route_values, tuple(route.part for route in routes)), features,
     )  # fmt: skip
     return points[None] if count == 1 else points
 
@@ -224,10 +239,11 @@ def run_trials(
     on_trial: Callable[[Trial, object], None],
     parts: SpecParts | None = None,
     submit: Submit | None = None,
+    features: Callable | None = None,
 ) -> list[Trial]:
     """Run trials until `optimizer.trials` are done, calling `on_trial(trial, payload)` after
     each (to record it, in trial order) and returning the whole history. `parts` (the spec's
-    top-level conjuncts) is what method `stl` models.
+    top-level conjuncts) is what method `stl` models, on `features` of the points.
 
     Each batch (see `next_points`) is executed through `submit` (parallel workers), and the
     next batch is proposed while it executes; by default `objective(x)` one after the other. A
@@ -244,7 +260,7 @@ def run_trials(
         return submit([(x, first + offset) for offset, (x, _) in enumerate(batch)]), submitted
 
     start = time.perf_counter()
-    batch = next_points(history, bounds, optimizer, parts) if len(history) < optimizer.trials else []
+    batch = next_points(history, bounds, optimizer, parts, features=features) if len(history) < optimizer.trials else []
     proposal_seconds = time.perf_counter() - start
     wait, submitted = started(batch, len(history) + 1) if batch else (None, 0.0)
     while batch:
@@ -252,7 +268,7 @@ def run_trials(
         following, following_seconds, following_wait = [], 0.0, None
         if pipelined and numbers[-1] < optimizer.trials:
             start = time.perf_counter()
-            following = next_points(history, bounds, optimizer, parts, [x for x, _ in batch])
+            following = next_points(history, bounds, optimizer, parts, [x for x, _ in batch], features=features)
             following_seconds = time.perf_counter() - start
         outcomes = wait()
         execution_seconds = time.perf_counter() - submitted
@@ -271,7 +287,7 @@ def run_trials(
             on_trial(trial, payload)
         if not pipelined and len(history) < optimizer.trials:
             start = time.perf_counter()
-            following = next_points(history, bounds, optimizer, parts)
+            following = next_points(history, bounds, optimizer, parts, features=features)
             following_seconds = time.perf_counter() - start
             following_wait, following_submitted = started(following, len(history) + 1)
         batch, proposal_seconds = following, following_seconds

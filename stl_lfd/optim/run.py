@@ -111,6 +111,12 @@ class PreparedRun:
     summary: Summary
     initial_signals: SignalTable | None = None  # when the run started in this process
 
+    def features(self):
+        """What method `stl`'s GP sees of a point (`features.path_features`), or None."""
+        from stl_lfd.optim.features import path_features
+
+        return path_features(self.space, self.models)
+
     def close(self) -> None:
         """Release the run directory's write lock and the simulator (ending the process does too)."""
         self.run.close()
@@ -310,7 +316,9 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
 
         pool = WorkerPool(prepared.task, prepared.models, getattr(prepared.run, "path", None), workers)
     try:
-        run_trials(objective, prepared.space.bounds, prepared.task.optimizer, prepared.history, record, prepared.objective.composition, pool)
+        run_trials(
+            objective, prepared.space.bounds, prepared.task.optimizer, prepared.history, record, prepared.objective.composition, pool, prepared.features()
+        )
     except BaseException:
         if pool is not None:
             pool.stop()  # now: the trials in flight are lost, as with one worker
