@@ -195,3 +195,19 @@ def test_routes_are_recorded_with_each_trial_and_a_resumed_run_proposes_the_same
 def test_a_spec_without_routes_records_none(tmp_path, learned_model_file):
     optimise(start_run(load_task(small_task(tmp_path, learned_model_file)), tmp_path / "run"))
     assert all("routes" not in json.loads(line) for line in (tmp_path / "run" / "trials.jsonl").read_text().splitlines())
+
+
+def test_a_run_on_transitions_models_paths_and_resumes_exactly(tmp_path, learned_model_file):
+    extra = "  transitions: band\n"
+    path = small_task(tmp_path, learned_model_file)
+    path.write_text(path.read_text().replace("optimizer: {initial: 3, trials: 5, seed: 2}", "optimizer: {initial: 3, trials: 6, seed: 2}").replace("  durations: {components: all}\n", "  durations: {components: all}\n" + extra))
+    task = load_task(path).with_overrides(method="stl")
+    whole = start_run(task, tmp_path / "whole")
+    assert whole.features() is not None and whole.features().dimension == 6 + 6 + 6  # means, durations, states
+    optimise(whole)
+    trials = [json.loads(line) for line in (tmp_path / "whole" / "trials.jsonl").read_text().splitlines()]
+    assert [trial["phase"] for trial in trials][3:] != ["sobol"] * 3
+    optimise(start_run(task.with_overrides(trials=4), tmp_path / "resumed"))
+    optimise(resume_run(tmp_path / "resumed", trials=6))
+    resumed = [json.loads(line) for line in (tmp_path / "resumed" / "trials.jsonl").read_text().splitlines()]
+    assert [trial["x"] for trial in resumed] == [trial["x"] for trial in trials]
