@@ -4,7 +4,8 @@
 - `space`: which parameters move, their bounds, and how a point becomes a model;
 - `acquisition`: Sobol and random points, GP fitting and acquisition maximisation (BoTorch);
 - `composite`: method `stl`, one GP output per part of the spec;
-- `features`: what method `stl`'s GP sees of a point (the state path it selects);
+- `features`: what method `stl`'s GP sees of a point (the state path it selects, the means on
+  it and when each of its states starts);
 - `loop`: the trial loop;
 - `rundir`, `resume`: run directories, and what a resume checks;
 - `run`: a run from a task file, from preparation to summary;

@@ -1,4 +1,5 @@
-"""What method `stl`'s GP sees: the state path a point selects, and the parameters on it."""
+"""What method `stl`'s GP sees: the state path a point selects, the means on it and when each
+of its states starts."""
 
 import copy
 
@@ -43,20 +44,35 @@ def test_paths_are_those_the_adapted_models_follow(learned_model):
     assert len(paths) > 4  # the sample covers several paths
 
 
+def test_times_are_when_the_adapted_models_states_start(learned_model):
+    models, space = two_skills(learned_model)
+    features = path_features(space, models)
+    skill = features.skills[0]
+    points = space.bounds[0] + unit_points(space, 50, 3) * (space.bounds[1] - space.bounds[0])
+    positions = skill.positions(points)
+    times = skill.times(torch.as_tensor(points), positions).numpy()
+    for row, point in enumerate(points):
+        model = space.apply(models, point)["first"]
+        path = model.nominal_path()
+        starts = np.concatenate([[0.0], np.cumsum(model.duration_means_[path])[:-1]])
+        np.testing.assert_allclose(times[row, path], starts, atol=1e-9)
+        assert times[row, -1] == pytest.approx(model.expected_duration())
+
+
 def test_points_that_execute_alike_look_alike(learned_model):
     models, space = two_skills(learned_model)
     features = path_features(space, models)
-    assert features.dimension == 6 + 6 + 6 + 2  # means and durations, six indicators, the second skill
+    assert features.dimension == 6 + 6 + 6 + 2  # means, five starts and the end, six indicators, the second skill
     unit = torch.as_tensor(unit_points(space, 1, 1))
     unit[0, 12:21] = torch.tensor([1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 0.0, 1.0])  # 1 -> 2 -> 4 -> 5 -> 6: state 3 skipped
     other = unit.clone()
     other[0, 3:6] = 0.1  # the mean of state 3
-    other[0, 6 + 2] = 0.9  # the duration of state 3
+    other[0, 6 + 2] = 0.9  # the duration of state 3: it starts no later state
     other[0, 12:21] = torch.tensor([0.9, 0.2, 0.3, 0.8, 0.6, 0.1, 0.7, 0.2, 0.6])  # the same successors
     seen, other_seen = features(unit), features(other)
     torch.testing.assert_close(seen, other_seen)
     assert seen[0, 12:18].tolist() == [1.0, 1.0, 0.0, 1.0, 1.0, 1.0]
-    assert torch.all(seen[0, 3:6] == SKIPPED) and seen[0, 6 + 2] == SKIPPED
+    assert torch.all(seen[0, 3:6] == SKIPPED) and seen[0, 6 + 1] == SKIPPED  # state 3's start
     torch.testing.assert_close(seen[0, -2:], unit[0, -2:])  # no transitions: passed through
 
 
@@ -70,9 +86,22 @@ def test_features_are_differentiable_in_the_parameters_on_the_path(learned_model
     assert torch.all(unit.grad[:, :12] >= 0) and torch.any(unit.grad[:, :12] == 1)
 
 
-def test_spaces_without_transitions_have_no_features(learned_model):
-    space = SearchSpace({"skill": build_space(learned_model, Parameters(MeanParameters((2,), ("x",)), DurationParameters("all", 1.0)))})
+def test_spaces_of_means_alone_have_no_features(learned_model):
+    space = SearchSpace({"skill": build_space(learned_model, Parameters(MeanParameters((2,), ("x",))))})
     assert path_features(space, {"skill": learned_model}) is None
+
+
+def test_durations_alone_are_seen_as_times_along_the_fixed_path(learned_model):
+    space = SearchSpace({"skill": build_space(learned_model, Parameters(MeanParameters((2,), ("x",)), DurationParameters("all", 1.0)))})
+    features = path_features(space, {"skill": learned_model})
+    assert features.dimension == 1 + 6  # the mean, five starts and the end
+    unit = torch.tensor([[0.3] + [0.0] * 6, [0.3] + [1.0] * 6, [0.3, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]], dtype=torch.float64)
+    seen = features(unit)
+    assert torch.all(seen[:, 0] == 0.3)
+    torch.testing.assert_close(seen[0, 1:], torch.zeros(6, dtype=torch.float64))  # every time at its least
+    torch.testing.assert_close(seen[1, 1:], torch.ones(6, dtype=torch.float64))  # and at its largest
+    assert seen[2, 1] == 1  # only the first state at its longest: the second starts as late as it can
+    assert torch.all(seen[2, 2:] > 0) and torch.all(seen[2, 2:] < 1)  # and every later time is later
 
 
 def test_a_gp_on_features_predicts_the_path_that_satisfies(learned_model):

@@ -200,7 +200,11 @@ def test_a_spec_without_routes_records_none(tmp_path, learned_model_file):
 def test_a_run_on_transitions_models_paths_and_resumes_exactly(tmp_path, learned_model_file):
     extra = "  transitions: band\n"
     path = small_task(tmp_path, learned_model_file)
-    path.write_text(path.read_text().replace("optimizer: {initial: 3, trials: 5, seed: 2}", "optimizer: {initial: 3, trials: 6, seed: 2}").replace("  durations: {components: all}\n", "  durations: {components: all}\n" + extra))
+    path.write_text(
+        path.read_text()
+        .replace("optimizer: {initial: 3, trials: 5, seed: 2}", "optimizer: {initial: 3, trials: 6, seed: 2}")
+        .replace("  durations: {components: all}\n", "  durations: {components: all}\n" + extra)
+    )
     task = load_task(path).with_overrides(method="stl")
     whole = start_run(task, tmp_path / "whole")
     assert whole.features() is not None and whole.features().dimension == 6 + 6 + 6  # means, durations, states
