@@ -41,10 +41,12 @@ TPE_STARTUP = 10  # Optuna's default n_startup_trials: random points before TPE 
 
 def method_and_initial(text: str) -> tuple[str, int | None]:
     """A method of `METHODS`, or a variant `METHOD/mK` that runs it with K initial trials
-    instead of the problem's (None: the problem's)."""
-    name, _, design = text.partition("/m")
-    if name not in METHODS or (design and (name == "tpe" or not design.isdigit())):
-        raise argparse.ArgumentTypeError(f"{text!r}: expected one of {', '.join(METHODS)}, or METHOD/mK")
+    instead of the problem's (None: the problem's). `METHOD@LABEL` names records of the method
+    from earlier code, kept under that label (`stl@step6`), for tables only."""
+    method, _, label = text.partition("@")
+    name, _, design = method.partition("/m")
+    if name not in METHODS or (design and (name == "tpe" or not design.isdigit())) or (label and not label.isidentifier()):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected one of {', '.join(METHODS)}, METHOD/mK, or METHOD@LABEL with --table")
     return name, int(design) if design else None
 
 
@@ -363,7 +365,13 @@ def main(argv: list[str] | None = None) -> None:
         os.environ.setdefault(variable, "1")  # inherited by the spawned workers
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--problems", nargs="+", default=problem_names())
-    parser.add_argument("--methods", nargs="+", default=list(METHODS), type=method_name, help="METHOD, or METHOD/mK for K initial trials")
+    parser.add_argument(
+        "--methods",
+        nargs="+",
+        default=list(METHODS),
+        type=method_name,
+        help="METHOD, METHOD/mK for K initial trials, or METHOD@LABEL (earlier code's records, with --table)",
+    )
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--jobs", type=int, default=2)
@@ -378,6 +386,8 @@ def main(argv: list[str] | None = None) -> None:
     )
     args = parser.parse_args(argv)
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+    if not args.table and any("@" in method for method in args.methods):
+        parser.error("METHOD@LABEL names records of earlier code: use it with --table")
     if args.search:
         for _, record in local_map(_search, [(problem, args.search) for problem in args.problems], args.jobs):
             _append(SEARCH_RESULTS, record)

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import json
 
-from benchmarks.bench_suite import paired_firsts, summarise
+import pytest
+
+from benchmarks.bench_suite import main, paired_firsts, summarise
 
 
 def _record(problem: str, method: str, seed: int, first: int | None) -> dict:
@@ -29,3 +31,15 @@ def test_a_records_file_of_its_own_gives_its_own_table(tmp_path):
     assert rows[("avoid", "pi")]["median first"] == "7"
     assert rows[("all", "stl")]["satisfied"] == "1/2 (50 %)"  # avoid has a solution shown (results/search.jsonl)
     assert paired_firsts(["avoid"], ["stl", "pi"], results=path) == [{"reference": "stl", "against": "pi", "pairs": 1, "stl": 3, "pi": 5}]
+
+
+def test_earlier_codes_records_are_tabled_under_their_label_and_never_run(tmp_path, capsys):
+    records = [_record("avoid", "stl", 0, 3), _record("avoid", "stl@step6", 0, None)]
+    path = tmp_path / "suite.jsonl"
+    path.write_text("".join(json.dumps(record) + "\n" for record in records))
+    main(["--table", "--markdown", "--problems", "avoid", "--methods", "stl", "stl@step6", "--seeds", "1", "--results", str(path)])
+    assert "| avoid | 32 | +0.0023 (56.0% of 400) | stl@step6 | 0 | 0/1 |" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        main(["--problems", "avoid", "--methods", "stl@step6", "--results", str(path)])
+    assert "use it with --table" in capsys.readouterr().err
+    assert path.read_text().count("\n") == 2  # nothing ran
