@@ -166,14 +166,14 @@ class PathFeatures:
         is that of the durations at their lower and at their upper bounds."""
         positions = skill.positions(points.numpy())
         on_path = np.concatenate([positions >= 0, np.ones((len(points), 1), dtype=bool)], axis=1)
+        durations = [skill.start + len(skill.space.mean_slots) + offset for offset in range(len(skill.space.duration_slots))]
         extremes = []
-        for side in (0, 1):
+        for side, missing in ((0, np.inf), (1, -np.inf)):  # a state on no sampled path: no range
             at_bound = points.clone()
-            columns = [skill.start + len(skill.space.mean_slots) + offset for offset in range(len(skill.space.duration_slots))]
-            at_bound[:, columns] = points.new_tensor(self.bounds[side, columns])
-            extremes.append(np.where(on_path, skill.times(at_bound, positions).numpy(), np.nan))
-        low, high = np.nanmin(extremes[0], axis=0), np.nanmax(extremes[1], axis=0)
-        columns = np.flatnonzero(np.nan_to_num(high - low) > 1e-9)
+            at_bound[:, durations] = points.new_tensor(self.bounds[side, durations])
+            extremes.append(np.where(on_path, skill.times(at_bound, positions).numpy(), missing))
+        low, high = extremes[0].min(axis=0), extremes[1].max(axis=0)
+        columns = np.flatnonzero(np.isfinite(low) & (high - low > 1e-9))
         return TimeScale(columns, low[columns], high[columns])
 
     @staticmethod

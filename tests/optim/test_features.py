@@ -2,6 +2,7 @@
 of its states starts."""
 
 import copy
+import warnings
 
 import numpy as np
 import pytest
@@ -127,3 +128,16 @@ def test_a_gp_on_features_predicts_the_path_that_satisfies(learned_model):
         correct[name] = hits / 300
     assert correct["features"] > 0.95
     assert correct["raw"] < correct["features"] - 0.1
+
+
+def test_a_state_on_no_sampled_path_has_no_time(learned_model):
+    models, space = two_skills(learned_model)
+    features = path_features(space, models)
+    unit = torch.as_tensor(unit_points(space, 64, 4))
+    unit[:, 12:21] = torch.tensor([1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 0.0, 1.0])  # every path skips state 3
+    points = torch.as_tensor(space.bounds[0]) + unit * torch.as_tensor(space.bounds[1] - space.bounds[0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scale = features._time_scale(features.skills[0], points)
+    assert 2 not in scale.columns and list(scale.columns) == [1, 3, 4, 5, 6]  # state 3's start; the end is 6
+    assert np.all(scale.high > scale.low)
