@@ -69,11 +69,11 @@ class SkillSlots:
         point).nominal_path()`."""
         space, count, K = self.space, len(points), self.states
         transmat = np.clip(np.broadcast_to(self.transmat, (count, K, K)).copy(), 0.0, None)
-        first = self.start + len(space.mean_slots) + len(space.duration_slots)
-        for offset, (source, target) in enumerate(space.transition_slots):
-            column = first + offset
-            value = np.clip(points[:, column], space.lower[column - self.start], space.upper[column - self.start])
-            transmat[:, source, target] = np.clip(value, 0.0, None)
+        if space.transition_slots:
+            columns = space.transition_columns
+            entries = np.clip(points[:, self.start + columns], space.lower[columns], space.upper[columns])
+            sources, targets = zip(*space.transition_slots)
+            transmat[:, sources, targets] = np.clip(entries, 0.0, None)
         positions = np.full((count, K), -1)
         rows = np.arange(count)
         state = np.full(count, self.first_state)
@@ -102,9 +102,7 @@ class SkillSlots:
         import torch
 
         durations = torch.as_tensor(self.duration_means, dtype=points.dtype).expand(len(points), -1).clone()
-        first = self.start + len(self.space.mean_slots)
-        for offset, state in enumerate(self.space.duration_slots):
-            durations[:, state] = points[:, first + offset]
+        durations[:, list(self.space.duration_slots)] = points[:, self.start + self.space.duration_columns]
         on_path = positions >= 0
         before = on_path[:, :, None] & (positions[:, :, None] < positions[:, None, :])  # b x j x k: j before k
         counted = np.concatenate([before, on_path[:, :, None]], axis=2)  # the end: after every state
@@ -134,13 +132,11 @@ class PathFeatures:
     def __init__(self, space: SearchSpace, models: dict[str, HSMM]) -> None:
         self.bounds = np.asarray(space.bounds, dtype=float)
         self.skills: list[SkillSlots] = []
-        start = 0
-        for skill, part in space.parts.items():
+        for (skill, part), start in zip(space.parts.items(), space.starts.values()):
             model = models[skill]
             transmat = np.asarray(model.transmat_, dtype=float)
             duration_means = np.asarray(model.duration_means_, dtype=float)
             self.skills.append(SkillSlots(start, part, transmat, int(np.argmax(model.startprob_)), duration_means))
-            start += part.dimension
 
     @cached_property
     def time_scales(self) -> list[TimeScale | None]:
@@ -166,7 +162,7 @@ class PathFeatures:
         is that of the durations at their lower and at their upper bounds."""
         positions = skill.positions(points.numpy())
         on_path = np.concatenate([positions >= 0, np.ones((len(points), 1), dtype=bool)], axis=1)
-        durations = [skill.start + len(skill.space.mean_slots) + offset for offset in range(len(skill.space.duration_slots))]
+        durations = skill.start + skill.space.duration_columns
         extremes = []
         for side, missing in ((0, np.inf), (1, -np.inf)):  # a state on no sampled path: no range
             at_bound = points.clone()

@@ -51,6 +51,16 @@ class ParameterSpace:
         """`2 x d`: lower bounds, then upper bounds (BoTorch's convention)."""
         return np.vstack([self.lower, self.upper])
 
+    @property
+    def duration_columns(self) -> np.ndarray:
+        """Where `duration_slots` sit in a point: after the means."""
+        return len(self.mean_slots) + np.arange(len(self.duration_slots))
+
+    @property
+    def transition_columns(self) -> np.ndarray:
+        """Where `transition_slots` sit in a point: after the means and durations."""
+        return len(self.mean_slots) + len(self.duration_slots) + np.arange(len(self.transition_slots))
+
     def apply(self, model: HSMM, x: np.ndarray) -> HSMM:
         """A copy of `model` with the parameters of point `x` (`d`), clipped to the bounds."""
         x = np.clip(np.asarray(x, dtype=float), self.lower, self.upper)
@@ -185,12 +195,17 @@ class SearchSpace:
     def dimension(self) -> int:
         return sum(part.dimension for part in self.parts.values())
 
+    @property
+    def starts(self) -> dict[str, int]:
+        """Per skill, the index of its first parameter in a point."""
+        ends = np.cumsum([part.dimension for part in self.parts.values()])
+        return {skill: int(end) - part.dimension for (skill, part), end in zip(self.parts.items(), ends)}
+
     def apply(self, models: dict[str, HSMM], x: np.ndarray) -> dict[str, HSMM]:
         """The skills' models with the parameters of point `x` (`d`); other skills unchanged."""
-        adapted, start = dict(models), 0
-        for skill, part in self.parts.items():
+        adapted = dict(models)
+        for (skill, part), start in zip(self.parts.items(), self.starts.values()):
             adapted[skill] = part.apply(models[skill], np.asarray(x)[start : start + part.dimension])
-            start += part.dimension
         return adapted
 
     def as_dict(self, x: np.ndarray) -> dict[str, float]:

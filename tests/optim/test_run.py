@@ -207,7 +207,7 @@ def test_a_run_on_transitions_models_paths_and_resumes_exactly(tmp_path, learned
     )
     task = load_task(path).with_overrides(method="stl")
     whole = start_run(task, tmp_path / "whole")
-    assert whole.features() is not None and whole.features().dimension == 6 + 6 + 6  # means, durations, states
+    assert whole.features() is not None and whole.features().dimension == 6 + 6 + 6  # means, five starts and the end, states
     optimise(whole)
     trials = [json.loads(line) for line in (tmp_path / "whole" / "trials.jsonl").read_text().splitlines()]
     assert [trial["phase"] for trial in trials][3:] != ["sobol"] * 3
