@@ -35,7 +35,7 @@ ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS_DIR = ROOT / "benchmarks" / "problems"
 RESULTS = ROOT / "benchmarks" / "results" / "suite.jsonl"
 SEARCH_RESULTS = ROOT / "benchmarks" / "results" / "search.jsonl"
-METHODS = ("stl", "pi", "logei", "random", "tpe")
+METHODS = ("stl", "plan", "pi", "logei", "random", "tpe")
 TPE_STARTUP = 10  # Optuna's default n_startup_trials: random points before TPE proposes
 
 

@@ -10,10 +10,14 @@ and the optimal control u_t = -K_t x_t + k_t.
 Tracking targets are piecewise constant (one per HSMM state), so (P_t, p_t) reach the fixed
 point of each segment's recursion after a few dozen steps; from there the step is skipped and
 the converged values are reused, which makes the recursion cost scale with the number of
-segments rather than the horizon.
+segments rather than the horizon. The P recursion of a segment does not depend on the targets,
+so it is computed once for the segments that retrievals with other means or durations share.
 """
 
 from __future__ import annotations
+
+from collections import OrderedDict
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -72,6 +76,57 @@ def solve(
     return states, controls
 
 
+@dataclass(frozen=True)
+class _SegmentRecursion:
+    """The Riccati recursion through one segment, from its end backwards: per step, the gain
+    `K` (`m x n`), the map `L B^T` (`m x n`) from `p_{t+1}` to the feedforward term, the closed
+    loop `A - B K` (`n x n`) and `P_t`; `converged` when the last step left P unchanged."""
+
+    gains: tuple[np.ndarray, ...]
+    feeds: tuple[np.ndarray, ...]
+    closed: tuple[np.ndarray, ...]
+    values: tuple[np.ndarray, ...]
+    converged: bool
+
+
+# The P recursion of a segment depends only on (A, B, R, its Q, the P it starts from), not on
+# the targets; a skill retrieved again with other means or durations meets the same segments
+# (its P at each segment's end is the next segment's converged value), so they are kept.
+_RECURSIONS: OrderedDict[bytes, _SegmentRecursion] = OrderedDict()
+_RECURSIONS_KEPT = 512
+
+
+def _segment_recursion(A: np.ndarray, B: np.ndarray, R: np.ndarray, Q: np.ndarray, P: np.ndarray, length: int) -> _SegmentRecursion:
+    """The recursion of a segment of `length` steps with state cost `Q`, entered with `P`:
+    until P is unchanged or for `length` steps."""
+    key = b"".join(np.ascontiguousarray(matrix).tobytes() for matrix in (A, B, R, Q, P))
+    known = _RECURSIONS.get(key)
+    if known is not None and (known.converged or len(known.gains) >= length):
+        _RECURSIONS.move_to_end(key)
+        return known
+    n = A.shape[0]
+    gains, feeds, closed_loops, values = [], [], [], []
+    converged = False
+    while len(gains) < length and not converged:
+        PB = P @ B
+        solution = np.linalg.solve(R + B.T @ PB, np.hstack([PB.T @ A, B.T]))  # m x 2n
+        gain = solution[:, :n]
+        closed = A - B @ gain
+        P_next = Q + A.T @ P @ closed
+        P_next = 0.5 * (P_next + P_next.T)  # rounding makes P drift from symmetry, then diverge
+        converged = _unchanged(P_next, P)
+        gains.append(gain)
+        feeds.append(solution[:, n:])
+        closed_loops.append(closed)
+        values.append(P_next)
+        P = P_next
+    recursion = _SegmentRecursion(tuple(gains), tuple(feeds), tuple(closed_loops), tuple(values), converged)
+    _RECURSIONS[key] = recursion
+    if len(_RECURSIONS) > _RECURSIONS_KEPT:
+        _RECURSIONS.popitem(last=False)
+    return recursion
+
+
 def _backward(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray, targets: np.ndarray, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Feedback gains `(T-1) x m x n` and feedforward terms `(T-1) x m`."""
     steps = ids.size
@@ -87,23 +142,22 @@ def _backward(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray, target
         first = t
         while first > 0 and ids[first - 1] == segment:
             first -= 1
-        while t >= first:
-            PB = P @ B
-            right_hand = np.column_stack([PB.T @ A, B.T @ p])  # m x (n + 1)
-            solution = np.linalg.solve(R + B.T @ PB, right_hand)
-            gains[t], offsets[t] = solution[:, :-1], solution[:, -1]
-            closed = A - B @ gains[t]
-            P_next = Q_t + A.T @ P @ closed
-            P_next = 0.5 * (P_next + P_next.T)  # rounding makes P drift from symmetry, then diverge
-            p_next = q_t + closed.T @ p
-            steady = _unchanged(P_next, P) and _unchanged(p_next, p)
-            P, p = P_next, p_next
+        recursion = _segment_recursion(A, B, R, Q_t, P, t - first + 1)
+        last = len(recursion.gains) - 1
+        for k in range(t - first + 1):
+            step = min(k, last)
+            gains[t], offsets[t] = recursion.gains[step], recursion.feeds[step] @ p
+            p_next = q_t + recursion.closed[step].T @ p
+            steady = recursion.converged and k >= last and _unchanged(p_next, p)
+            p = p_next
             t -= 1
             if steady and t >= first:
                 # Fixed point reached: every earlier step of the segment is the same.
                 gains[first : t + 1] = gains[t + 1]
                 offsets[first : t + 1] = offsets[t + 1]
                 t = first - 1
+                break
+        P = recursion.values[min(k, last)]
     return gains, offsets
 
 

@@ -101,10 +101,10 @@ def ask(
         design = run.initial_design()
         if design is not None and design.shape != (task.optimizer.initial, len(prepared.space.bounds[0])):
             design = None
-        features = prepared.features()
+        features, plan = prepared.features(), prepared.plan()
         while len(recorder.history) < task.optimizer.trials:
             start = time.perf_counter()
-            x, phase = next_point(recorder.history, prepared.space.bounds, task.optimizer, objective.composition, design, features)
+            x, phase = next_point(recorder.history, prepared.space.bounds, task.optimizer, objective.composition, design, features, plan)
             number = len(recorder.history) + 1
             try:
                 reference = objective.reference(prepared.space.apply(prepared.models, x))

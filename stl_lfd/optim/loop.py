@@ -82,11 +82,13 @@ def next_point(
     parts: SpecParts | None = None,
     initial_design: np.ndarray | None = None,
     features: Callable | None = None,
+    plan: Callable | None = None,
 ) -> tuple[np.ndarray, str]:
     """The point of trial `len(history) + 1` and the phase that chose it; method `stl` models
     each of `parts`, the spec's top-level conjuncts, as functions of `features` of the points
-    (`features.path_features`; None: the points themselves)."""
-    return next_points(history, bounds, optimizer, parts, initial_design=initial_design, features=features)[0]
+    (`features.path_features`; None: the points themselves); method `plan` models each
+    part's difference from its `plan` (`planned.Plan`)."""
+    return next_points(history, bounds, optimizer, parts, initial_design=initial_design, features=features, plan=plan)[0]
 
 
 def next_points(
@@ -97,6 +99,7 @@ def next_points(
     running: Sequence[np.ndarray] = (),
     initial_design: np.ndarray | None = None,
     features: Callable | None = None,
+    plan: Callable | None = None,
 ) -> list[tuple[np.ndarray, str]]:
     """The points (and phases) of the trials from `len(history) + len(running) + 1` to the end
     of their batch; `running` are the points of the trials after `history` still executing;
@@ -113,6 +116,8 @@ def next_points(
     """
     index = len(history) + len(running)
     start, end = batch_of(index, optimizer)
+    if optimizer.method == "plan":
+        return [(_planned_point(history, bounds, optimizer, parts, plan, features), "plan")]
     if index < optimizer.initial:
         design = sobol_points(bounds, optimizer.initial, optimizer.seed) if initial_design is None else initial_design
         return [(point, "sobol") for point in design[index:end]]
@@ -191,6 +196,32 @@ def _composite_points(
     return points[None] if count == 1 else points
 
 
+def _planned_point(
+    history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None, plan: Callable | None, features: Callable | None
+) -> np.ndarray:
+    """Method `plan`'s next point, from the successful trials (a failed one has no difference
+    from its plan to learn)."""
+    from stl_lfd.optim.planned import propose_planned
+
+    if plan is None or parts is None:
+        raise ValueError("method plan needs the spec's parts and the plan of a point")
+    routes = getattr(parts, "routes", ())
+    succeeded = [trial for trial in history if trial.robustness is not None]
+    outputs = np.empty((0, len(parts.names) + len(routes)))
+    if succeeded:
+        values = part_observations(succeeded, tuple(parts.names))
+        route_values = part_observations(succeeded, tuple(route.name for route in routes), "routes") if routes else np.empty((len(succeeded), 0))
+        if values is None or route_values is None:
+            raise ValueError("method plan needs every trial's parts (trials.jsonl 'components')")
+        outputs = np.hstack([values, route_values])
+    X = np.array([trial.x for trial in succeeded]).reshape(-1, bounds.shape[1])
+    Y = np.array([trial.robustness for trial in succeeded])
+    return propose_planned(
+        X, outputs, Y, bounds, parts.semantics, len(parts.names), plan, optimizer.seed, optimizer.seed + len(history),
+        getattr(parts, "groups", 1), tuple(route.part for route in routes), features,
+    )  # fmt: skip
+
+
 def part_observations(history: list[Trial], names: tuple[str, ...], recorded_as: str = "components") -> np.ndarray | None:
     """`n x m` robustness of each part at each trial (failed trials enter with each part's worst
     value, as in `observations`), or None when a successful trial did not record its parts.
@@ -240,6 +271,7 @@ def run_trials(
     parts: SpecParts | None = None,
     submit: Submit | None = None,
     features: Callable | None = None,
+    plan: Callable | None = None,
 ) -> list[Trial]:
     """Run trials until `optimizer.trials` are done, calling `on_trial(trial, payload)` after
     each (to record it, in trial order) and returning the whole history. `parts` (the spec's
@@ -260,7 +292,7 @@ def run_trials(
         return submit([(x, first + offset) for offset, (x, _) in enumerate(batch)]), submitted
 
     start = time.perf_counter()
-    batch = next_points(history, bounds, optimizer, parts, features=features) if len(history) < optimizer.trials else []
+    batch = next_points(history, bounds, optimizer, parts, features=features, plan=plan) if len(history) < optimizer.trials else []
     proposal_seconds = time.perf_counter() - start
     wait, submitted = started(batch, len(history) + 1) if batch else (None, 0.0)
     while batch:
@@ -268,7 +300,7 @@ def run_trials(
         following, following_seconds, following_wait = [], 0.0, None
         if pipelined and numbers[-1] < optimizer.trials:
             start = time.perf_counter()
-            following = next_points(history, bounds, optimizer, parts, [x for x, _ in batch], features=features)
+            following = next_points(history, bounds, optimizer, parts, [x for x, _ in batch], features=features, plan=plan)
             following_seconds = time.perf_counter() - start
         outcomes = wait()
         execution_seconds = time.perf_counter() - submitted
@@ -287,7 +319,7 @@ def run_trials(
             on_trial(trial, payload)
         if not pipelined and len(history) < optimizer.trials:
             start = time.perf_counter()
-            following = next_points(history, bounds, optimizer, parts, features=features)
+            following = next_points(history, bounds, optimizer, parts, features=features, plan=plan)
             following_seconds = time.perf_counter() - start
             following_wait, following_submitted = started(following, len(history) + 1)
         batch, proposal_seconds = following, following_seconds

@@ -3,6 +3,7 @@ the trial loop, recording everything in the run directory as it goes."""
 
 from __future__ import annotations
 
+import copy
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -70,6 +71,14 @@ class SkillObjective:
     def __call__(self, x: np.ndarray, trial: int = 0) -> Outcome:
         return self.evaluate(self.space.apply(self.models, x), trial)
 
+    def planned(self) -> "SkillObjective":
+        """This objective on the kinematic backend: it scores the plan (the reference itself)."""
+        from stl_lfd.sim.kinematic import KinematicBackend
+
+        plan = copy.copy(self)
+        plan.backend = KinematicBackend()
+        return plan
+
     def reference(self, models: dict[str, HSMM], scene: Scene | None = None) -> Reference:
         """What executing `models` means: the behaviour's (or single skill's) reference, for the
         object frames of `scene` (default: the first placement)."""
@@ -116,6 +125,22 @@ class PreparedRun:
         from stl_lfd.optim.features import path_features
 
         return path_features(self.space, self.models)
+
+    def plan(self):
+        """Method `plan`'s prior (`planned.Plan`: the plan's robustness of each part and route
+        of the spec at a point), or None for the other methods."""
+        if self.task.optimizer.method != "plan":
+            return None
+        from stl_lfd.optim.planned import Plan
+
+        planned, routes = self.objective.planned(), getattr(self.objective.composition, "routes", ())
+
+        def score(x: np.ndarray) -> np.ndarray:
+            outcome = planned(x)
+            values = list(outcome.components.values()) + [outcome.routes[route.name] for route in routes]
+            return np.array(values, dtype=float)
+
+        return Plan(score, self.space.bounds)
 
     def close(self) -> None:
         """Release the run directory's write lock and the simulator (ending the process does too)."""
@@ -317,7 +342,15 @@ def optimise(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], No
         pool = WorkerPool(prepared.task, prepared.models, getattr(prepared.run, "path", None), workers)
     try:
         run_trials(
-            objective, prepared.space.bounds, prepared.task.optimizer, prepared.history, record, prepared.objective.composition, pool, prepared.features()
+            objective,
+            prepared.space.bounds,
+            prepared.task.optimizer,
+            prepared.history,
+            record,
+            prepared.objective.composition,
+            pool,
+            prepared.features(),
+            prepared.plan(),
         )
     except BaseException:
         if pool is not None:

@@ -34,7 +34,7 @@ GOOD_PARAMETERS = "parameters:\n  means: {components: [2]}\n"
         ("parameters:\n  means: {components: [2], bta: 2}\n", "unknown key 'parameters.means.bta'"),
         ("paramters: {}\n", "unknown key 'paramters'"),
         (GOOD_PARAMETERS + "optimizer: {initial: 10, trials: 5}\n", r"'optimizer.initial' \(10\) exceeds 'optimizer.trials' \(5\)"),
-        (GOOD_PARAMETERS + "optimizer: {method: ucb}\n", "'optimizer.method' must be one of stl, pi, logei, random"),
+        (GOOD_PARAMETERS + "optimizer: {method: ucb}\n", "'optimizer.method' must be one of stl, plan, pi, logei, random"),
         (GOOD_PARAMETERS + "semantics: fuzzy\n", "'semantics' must be one of classic, new"),
         (GOOD_PARAMETERS + "nu: -1\n", "'nu' must be positive"),
         ("parameters:\n  means: {components: [2], beta: 0}\n", "'parameters.means.beta' must be positive"),

@@ -1,0 +1,193 @@
+"""Composite BO with the plan as the prior (method `plan`).
+
+Before a trial executes, the tool already knows what it will ask the robot to do: the
+reference retrieved from the adapted skill. Scored as it stands (the kinematic backend, about
+40-90 ms), this plan gives the robustness of every part of the spec without a robot trial. The
+execution differs from the plan by what the plan cannot know: tracking errors, and contact
+(the plan records no force). So each part's GP models the difference between execution and
+plan, starting from none, and a part's sample at a point is the plan's value plus a sample of
+the difference; the samples are composed through the spec's semantics as in method `stl`
+(`composite.py`), and expected improvement is taken over them.
+
+The plan is not differentiable, so the acquisition is maximised over a finite set of
+candidates: a scrambled Sobol pool of the box (its plans computed once per run), then rounds of
+normal perturbations around the best candidates so far, each round closer. Everything depends
+only on the history, the seed and the trial number (the plans are a pure function of the
+point), so a resumed run proposes the points an uninterrupted one did.
+
+Where the plan predicts the execution (positions in free space), the first trial is already
+the best point the plan search found; where it does not (the force of an insertion), the
+difference's GP learns the part from the trials.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable
+
+import numpy as np
+
+from stl_lfd.optim.acquisition import single_threaded
+from stl_lfd.optim.composite import MC_SAMPLES, PartsPosterior, _through_routes, compose, fit_multi_output_gp
+from stl_lfd.stl import Semantics
+
+POOL = 128  # Sobol candidates whose plans are computed once per run
+# Refinement rounds: the standard deviation (unit cube) of each round's draws, how many of the
+# best candidates are perturbed, and how many draws around each. The first trial, chosen by the
+# plan alone, gets a longer search (once per run); later ones stay cheap, about 30 plans, as
+# the trials' history carries the search on.
+FIRST_ROUNDS = ((0.1, 0.04, 0.015, 0.006), 4, 8)
+ROUNDS = ((0.08, 0.02), 3, 5)
+
+
+class Plan:
+    """The plan's robustness of each output (the spec's parts, then its routes) at points of the
+    unit cube of `bounds`: `b x d` -> `b x o`, a row of NaN where the reference could not be
+    built or scored. Memoised: the same point is planned once.
+
+    Args:
+        score: x (`d`, in parameter units) -> `o` values (raises for a point without a plan).
+        bounds: `2 x d` parameter bounds.
+    """
+
+    def __init__(self, score: Callable[[np.ndarray], np.ndarray], bounds: np.ndarray) -> None:
+        self.score, self.bounds = score, bounds
+        self.memo: dict[bytes, np.ndarray] = {}
+
+    def __call__(self, unit: np.ndarray) -> np.ndarray:
+        return np.array([self._one(point) for point in np.atleast_2d(unit)])
+
+    def _one(self, point: np.ndarray) -> np.ndarray:
+        key = point.tobytes()
+        if key not in self.memo:
+            x = self.bounds[0] + point * (self.bounds[1] - self.bounds[0])
+            try:
+                values = np.asarray(self.score(x), dtype=float)
+            except Exception:  # no reference for this point: never a candidate
+                values = None
+            self.memo[key] = values
+        values = self.memo[key]
+        return values if values is not None else np.full(self._outputs(), np.nan)
+
+    def _outputs(self) -> int:
+        known = next((values for values in self.memo.values() if values is not None), None)
+        return 1 if known is None else len(known)
+
+
+def propose_planned(
+    X: np.ndarray,
+    outputs: np.ndarray,
+    Y: np.ndarray,
+    bounds: np.ndarray,
+    semantics: Semantics,
+    parts: int,
+    plan: Plan,
+    seed: int,
+    trial_seed: int,
+    groups: int = 1,
+    route_parts: tuple[int, ...] = (),
+    features: Callable | None = None,
+) -> np.ndarray:
+    """The next point (`d`) of method `plan`.
+
+    Args:
+        X: `n x d` observed points (n may be 0).
+        outputs: `n x o` robustness of the spec's parts (then routes) at those points.
+        Y: `n` composed robustness at those points.
+        bounds: `2 x d`.
+        semantics: how the parts compose; `groups`: equal groups of parts, the minimum over
+            them (several placements); `route_parts`: the part each route implies.
+        parts: `m`, how many of the `o` outputs are parts.
+        plan: the plan of each output at unit-cube points.
+        seed: the run's seed (the pool); `trial_seed`: this proposal's (draws and samples).
+        features: what the GP sees of `b x d` unit-cube points (`features.PathFeatures`).
+    """
+    with single_threaded():
+        unit = (X - bounds[0]) / (bounds[1] - bounds[0])
+        difference = _difference_posterior(unit, outputs - plan(unit) if len(X) else outputs, features)
+        best = float(np.max(Y)) if len(Y) else -np.inf
+        scale = float(np.std(Y)) if len(Y) > 1 and np.std(Y) > 0 else 1.0
+        score = _scorer(difference, plan, best, scale, semantics, parts, groups, route_parts, trial_seed, features)
+        candidates = _pool(bounds.shape[1], seed)
+        values = score(candidates)
+        generator = np.random.default_rng([seed, trial_seed])
+        spreads, centre_count, draw_count = ROUNDS if len(X) else FIRST_ROUNDS
+        for spread in spreads:
+            centres = candidates[np.argsort(-values, kind="stable")[:centre_count]]
+            draws = np.clip(centres[:, None, :] + spread * generator.standard_normal((len(centres), draw_count, bounds.shape[1])), 0.0, 1.0)
+            draws = draws.reshape(-1, bounds.shape[1])
+            candidates, values = np.vstack([candidates, draws]), np.concatenate([values, score(draws)])
+        tried = np.min(np.abs(candidates[:, None, :] - unit[None, :, :]).max(axis=-1), axis=1) < 1e-9 if len(unit) else np.zeros(len(candidates), bool)
+        values = np.where(tried, -np.inf, values)  # a point already executed would teach nothing new
+    chosen = candidates[int(np.argmax(values))]
+    return np.clip(bounds[0] + chosen * (bounds[1] - bounds[0]), bounds[0], bounds[1])
+
+
+def _pool(dimension: int, seed: int) -> np.ndarray:
+    import torch
+    from torch.quasirandom import SobolEngine
+
+    return SobolEngine(dimension, scramble=True, seed=seed).draw(POOL, dtype=torch.float64).numpy()
+
+
+def _difference_posterior(unit: np.ndarray, difference: np.ndarray, features: Callable | None):
+    """Posterior means and standard deviations (`b x o` each) of the execution's difference
+    from the plan at `b x d` unit-cube points, as a function of numpy points.
+
+    Before any trial the difference is 0. An output whose difference has been the same at
+    every trial (or seen at one trial only) is that value give or take as much, anywhere: 0
+    exactly while the execution is the plan (the kinematic backend). The others get a GP each.
+    """
+    import torch
+
+    encode = features if features is not None else (lambda points: points)
+    known = np.isfinite(difference).all(axis=1)
+    unit, difference = unit[known], difference[known]
+    outputs = difference.shape[1]
+    mean = difference.mean(axis=0) if len(difference) else np.zeros(outputs)
+    std = np.abs(mean)
+    varying = np.ptp(difference, axis=0) > 0 if len(difference) >= 2 else np.zeros(outputs, dtype=bool)
+    posterior = None
+    if varying.any():
+        inputs = encode(torch.as_tensor(unit, dtype=torch.float64)).numpy()
+        posterior = PartsPosterior(fit_multi_output_gp(inputs, difference[:, varying]))
+
+    def predict(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        means, stds = np.tile(mean, (len(points), 1)), np.tile(std, (len(points), 1))
+        if posterior is not None:
+            with torch.no_grad():
+                fitted_mean, fitted_std = posterior(encode(torch.as_tensor(points, dtype=torch.float64)))
+            means[:, varying], stds[:, varying] = fitted_mean.numpy(), fitted_std.numpy()
+        return means, stds
+
+    return predict
+
+
+def _scorer(difference, plan: Plan, best: float, scale: float, semantics: Semantics, parts: int, groups: int, route_parts, seed: int, features):
+    """`b x d` unit points -> `b` acquisition values: the log expected improvement over `best`
+    of the composed samples of plan + difference (as `composite.composed_log_ei`), or the
+    composed mean before any trial; -inf where there is no plan."""
+    import torch
+    from torch.quasirandom import SobolEngine
+
+    def score(points: np.ndarray) -> np.ndarray:
+        planned = plan(points)  # b x o
+        mean, std = difference(points)
+        outputs = planned.shape[1]
+        unit = SobolEngine(outputs, scramble=True, seed=seed).draw(MC_SAMPLES, dtype=torch.float64)
+        normal = torch.distributions.Normal(0.0, 1.0).icdf(unit.clamp(1e-6, 1 - 1e-6))  # S x o
+        centre = torch.as_tensor(planned + mean, dtype=torch.float64)
+        spread = torch.as_tensor(std, dtype=torch.float64)
+        samples = _through_routes(centre.unsqueeze(-2) + spread.unsqueeze(-2) * normal, parts, route_parts)
+        composed = compose(torch.nan_to_num(samples, nan=-1e9), semantics, groups)  # b x S
+        if not math.isfinite(best):
+            values = composed.mean(dim=-1)
+        else:
+            temperature = 0.01 * scale
+            improvement = (composed - best) / temperature
+            log_softplus = torch.where(improvement < -30, improvement, torch.nn.functional.softplus(improvement).clamp_min(1e-300).log())
+            values = torch.logsumexp(log_softplus, dim=-1)
+        values = values.numpy()
+        return np.where(np.isfinite(planned).all(axis=1), values, -np.inf)
+
+    return score

@@ -1,0 +1,112 @@
+"""Method `plan`: the plan as the prior, the difference learned from the trials."""
+
+import json
+
+import numpy as np
+import pytest
+
+from stl_lfd.optim import load_task, optimise, resume_run, start_run
+from stl_lfd.optim.loop import Outcome, best_trial, run_trials
+from stl_lfd.optim.planned import Plan, propose_planned
+from stl_lfd.optim.task import Optimizer
+from stl_lfd.stl import Semantics, parse, split_spec
+from tests.optim.test_run import small_task
+
+BOUNDS = np.array([[0.0] * 4, [1.0] * 4])
+PARTS = split_spec(parse("a > 0 & b > 0"), "new")
+
+
+def planned_parts(x: np.ndarray) -> np.ndarray:
+    """What the plan says of each part: a small box around (0.8, 0.2, 0.3, 0.6) satisfies both."""
+    return np.array([0.15 - abs(x[0] - 0.8) - 0.3 * abs(x[2] - 0.3), 0.15 - abs(x[1] - 0.2) - 0.3 * abs(x[3] - 0.6)])
+
+
+def executed_parts(x: np.ndarray) -> np.ndarray:
+    """The execution: part b loses more the further x[2] is below 0.6 (contact the plan cannot
+    see), so the plan's best points (x[2] = 0.3) fail; x[2] near 0.5 satisfies both parts."""
+    return planned_parts(x) - np.array([0.0, 0.5 * max(0.0, 0.6 - x[2])])
+
+
+def objective(parts):
+    def evaluate(x):
+        values = parts(x)
+        return Outcome(PARTS.compose(values), components=dict(zip(PARTS.names, values.tolist())))
+
+    return evaluate
+
+
+def run(parts, optimizer, history=()):
+    plan = Plan(planned_parts, BOUNDS)
+    return run_trials(objective(parts), BOUNDS, optimizer, list(history), lambda trial, payload: None, PARTS, plan=plan)
+
+
+def test_a_plan_is_memoised_and_a_point_without_one_is_nan():
+    calls = []
+
+    def score(x):
+        calls.append(x)
+        if x[0] > 0.5:
+            raise ValueError("no reference")
+        return planned_parts(x)
+
+    plan = Plan(score, BOUNDS)
+    points = np.array([[0.1, 0.2, 0.3, 0.4], [0.9, 0.2, 0.3, 0.4]])
+    first = plan(points)
+    np.testing.assert_array_equal(first[0], planned_parts(points[0]))
+    assert np.all(np.isnan(first[1]))
+    again = plan(points)
+    assert len(calls) == 2 and np.array_equal(again[0], first[0]) and np.all(np.isnan(again[1]))
+
+
+def test_the_first_point_is_the_best_plan_the_search_finds():
+    plan = Plan(planned_parts, BOUNDS)
+    x = propose_planned(np.empty((0, 4)), np.empty((0, 2)), np.empty(0), BOUNDS, Semantics("new", 1.0), 2, plan, seed=0, trial_seed=0)
+    planned = [PARTS.compose(values) for values in plan.memo.values()]
+    assert PARTS.compose(planned_parts(x)) == pytest.approx(max(planned))
+    assert PARTS.compose(planned_parts(x)) > 0  # the box is found by the plan search alone
+
+
+def test_where_the_plan_is_exact_the_first_trial_satisfies():
+    for seed in range(3):
+        history = run(planned_parts, Optimizer("plan", initial=1, trials=2, seed=seed))
+        assert history[0].satisfied and history[0].phase == "plan", seed
+
+
+def test_where_the_plan_is_wrong_the_difference_is_learned_from_the_trials():
+    for seed in range(3):
+        history = run(executed_parts, Optimizer("plan", initial=4, trials=12, seed=seed))
+        assert best_trial(history).satisfied, seed
+        assert best_trial(history).x[2] > 0.45, seed  # well away from the plan's best, x[2] = 0.3
+
+
+def test_method_plan_is_reproducible_and_resumes_exactly():
+    optimizer = Optimizer("plan", initial=4, trials=6, seed=1)
+    first = run(executed_parts, optimizer)
+    assert np.array_equal([t.x for t in first], [t.x for t in run(executed_parts, optimizer)])
+    resumed = run(executed_parts, optimizer, run(executed_parts, Optimizer("plan", initial=3, trials=3, seed=1)))
+    assert np.array_equal([t.x for t in resumed], [t.x for t in first])
+    assert all(np.all((t.x >= BOUNDS[0]) & (t.x <= BOUNDS[1])) for t in first)
+
+
+def test_method_plan_refuses_parallel_trials():
+    with pytest.raises(Exception, match="one trial at a time"):
+        Optimizer("plan", initial=4, trials=6, workers=2)
+
+
+@pytest.mark.slow
+def test_a_run_with_method_plan_scores_the_plan_on_the_kinematic_backend_and_resumes(tmp_path, learned_model_file):
+    task = load_task(small_task(tmp_path, learned_model_file)).with_overrides(method="plan", initial=1, trials=4)
+    whole = start_run(task, tmp_path / "whole")
+    plan = whole.plan()
+    x = (whole.space.bounds[0] + whole.space.bounds[1]) / 2
+    planned = plan((x - whole.space.bounds[0])[None] / (whole.space.bounds[1] - whole.space.bounds[0]))[0]
+    executed = whole.objective(x)
+    np.testing.assert_allclose(planned, list(executed.components.values()))  # the kinematic backend executes the plan
+    optimise(whole)
+    trials = [json.loads(line) for line in (tmp_path / "whole" / "trials.jsonl").read_text().splitlines()]
+    assert [trial["phase"] for trial in trials] == ["plan"] * 4
+    assert trials[0]["robustness"] > whole.summary.initial_robustness
+    optimise(start_run(task.with_overrides(trials=2), tmp_path / "resumed"))
+    optimise(resume_run(tmp_path / "resumed", trials=4))
+    resumed = [json.loads(line) for line in (tmp_path / "resumed" / "trials.jsonl").read_text().splitlines()]
+    assert [trial["x"] for trial in resumed] == [trial["x"] for trial in trials]
