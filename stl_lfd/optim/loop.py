@@ -117,7 +117,8 @@ def next_points(
     index = len(history) + len(running)
     start, end = batch_of(index, optimizer)
     if optimizer.method == "plan":
-        return [(_planned_point(history, bounds, optimizer, parts, plan, features), "plan")]
+        phase = "design" if index < optimizer.initial else "plan"
+        return [(_planned_point(history, bounds, optimizer, parts, plan, features, phase == "design"), phase)]
     if index < optimizer.initial:
         design = sobol_points(bounds, optimizer.initial, optimizer.seed) if initial_design is None else initial_design
         return [(point, "sobol") for point in design[index:end]]
@@ -197,10 +198,10 @@ def _composite_points(
 
 
 def _planned_point(
-    history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None, plan: Callable | None, features: Callable | None
+    history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None, plan: Callable | None, features: Callable | None, design: bool
 ) -> np.ndarray:
-    """Method `plan`'s next point, from the successful trials (a failed one has no difference
-    from its plan to learn)."""
+    """Method `plan`'s next point (one of the initial `design`'s or not), modelled on the
+    successful trials: a failed one has no difference from its plan to learn."""
     from stl_lfd.optim.planned import propose_planned
 
     if plan is None or parts is None:
@@ -218,7 +219,8 @@ def _planned_point(
     Y = np.array([trial.robustness for trial in succeeded])
     return propose_planned(
         X, outputs, Y, bounds, parts.semantics, len(parts.names), plan, optimizer.seed, optimizer.seed + len(history),
-        getattr(parts, "groups", 1), tuple(route.part for route in routes), features,
+        getattr(parts, "groups", 1), tuple(route.part for route in routes), features, design,
+        np.array([trial.x for trial in history]).reshape(-1, bounds.shape[1]),
     )  # fmt: skip
 
 

@@ -87,8 +87,15 @@ def propose_planned(
     groups: int = 1,
     route_parts: tuple[int, ...] = (),
     features: Callable | None = None,
+    design: bool = False,
+    tried: np.ndarray | None = None,
 ) -> np.ndarray:
     """The next point (`d`) of method `plan`.
+
+    The first trial is the best point of the plan search. The other trials of the initial
+    design (`design`) spread over the points the plan says satisfy the spec (`spread_point`),
+    so that the parts the plan cannot see are sampled across the box, as Sobol trials would;
+    after them, the acquisition on plan + difference chooses.
 
     Args:
         X: `n x d` observed points (n may be 0).
@@ -101,14 +108,21 @@ def propose_planned(
         plan: the plan of each output at unit-cube points.
         seed: the run's seed (the pool); `trial_seed`: this proposal's (draws and samples).
         features: what the GP sees of `b x d` unit-cube points (`features.PathFeatures`).
+        design: whether this trial is one of the initial design's.
+        tried: `k x d` points of every trial so far, failed ones too (default: `X`); none is
+            proposed again.
     """
     with single_threaded():
         unit = (X - bounds[0]) / (bounds[1] - bounds[0])
+        tried = unit if tried is None else (tried - bounds[0]) / (bounds[1] - bounds[0])
+        if design and len(tried):
+            chosen = spread_point(sobol_pool(bounds.shape[1], seed), plan, tried, semantics, parts, groups, route_parts)
+            return bounds[0] + chosen * (bounds[1] - bounds[0])
         difference = _difference_posterior(unit, outputs - plan(unit) if len(X) else outputs, features)
         best = float(np.max(Y)) if len(Y) else -np.inf
         scale = float(np.std(Y)) if len(Y) > 1 and np.std(Y) > 0 else 1.0
         score = _scorer(difference, plan, best, scale, semantics, parts, groups, route_parts, trial_seed, features)
-        candidates = _pool(bounds.shape[1], seed)
+        candidates = sobol_pool(bounds.shape[1], seed)
         values = score(candidates)
         generator = np.random.default_rng([seed, trial_seed])
         spreads, centre_count, draw_count = ROUNDS if len(X) else FIRST_ROUNDS
@@ -117,13 +131,31 @@ def propose_planned(
             draws = np.clip(centres[:, None, :] + spread * generator.standard_normal((len(centres), draw_count, bounds.shape[1])), 0.0, 1.0)
             draws = draws.reshape(-1, bounds.shape[1])
             candidates, values = np.vstack([candidates, draws]), np.concatenate([values, score(draws)])
-        tried = np.min(np.abs(candidates[:, None, :] - unit[None, :, :]).max(axis=-1), axis=1) < 1e-9 if len(unit) else np.zeros(len(candidates), bool)
-        values = np.where(tried, -np.inf, values)  # a point already executed would teach nothing new
+        repeated = np.min(np.abs(candidates[:, None, :] - tried[None, :, :]).max(axis=-1), axis=1) < 1e-9 if len(tried) else np.zeros(len(candidates), bool)
+        values = np.where(repeated, -np.inf, values)  # a point already executed would teach nothing new
     chosen = candidates[int(np.argmax(values))]
     return np.clip(bounds[0] + chosen * (bounds[1] - bounds[0]), bounds[0], bounds[1])
 
 
-def _pool(dimension: int, seed: int) -> np.ndarray:
+def spread_point(pool: np.ndarray, plan: Plan, tried: np.ndarray, semantics: Semantics, parts: int, groups: int, route_parts) -> np.ndarray:
+    """The point of `pool` (`P x d`, unit cube) farthest from the `n x d` `tried` points among
+    the untried ones whose plan satisfies the spec (or, when none is left, among the best
+    quarter by plan)."""
+    import torch
+
+    planned = plan(pool)
+    values = compose(_through_routes(torch.as_tensor(np.nan_to_num(planned, nan=-1e9)), parts, route_parts), semantics, groups).numpy()
+    values = np.where(np.isfinite(planned).all(axis=1), values, -np.inf)
+    distance = np.min(np.linalg.norm(pool[:, None, :] - tried[None, :, :], axis=-1), axis=1)
+    untried = distance > 1e-9
+    eligible = untried & (values > 0)
+    if not eligible.any():
+        eligible = untried & (values >= np.quantile(values[untried], 0.75))
+    return pool[int(np.argmax(np.where(eligible, distance, -np.inf)))]
+
+
+def sobol_pool(dimension: int, seed: int) -> np.ndarray:
+    """The run's `POOL x d` candidates: scrambled Sobol points of the unit cube."""
     import torch
     from torch.quasirandom import SobolEngine
 

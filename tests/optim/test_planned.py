@@ -7,7 +7,7 @@ import pytest
 
 from stl_lfd.optim import load_task, optimise, resume_run, start_run
 from stl_lfd.optim.loop import Outcome, best_trial, run_trials
-from stl_lfd.optim.planned import Plan, propose_planned
+from stl_lfd.optim.planned import Plan, propose_planned, sobol_pool
 from stl_lfd.optim.task import Optimizer
 from stl_lfd.stl import Semantics, parse, split_spec
 from tests.optim.test_run import small_task
@@ -69,7 +69,7 @@ def test_the_first_point_is_the_best_plan_the_search_finds():
 def test_where_the_plan_is_exact_the_first_trial_satisfies():
     for seed in range(3):
         history = run(planned_parts, Optimizer("plan", initial=1, trials=2, seed=seed))
-        assert history[0].satisfied and history[0].phase == "plan", seed
+        assert history[0].satisfied and history[0].phase == "design", seed
 
 
 def test_where_the_plan_is_wrong_the_difference_is_learned_from_the_trials():
@@ -88,6 +88,18 @@ def test_method_plan_is_reproducible_and_resumes_exactly():
     assert all(np.all((t.x >= BOUNDS[0]) & (t.x <= BOUNDS[1])) for t in first)
 
 
+def test_the_design_spreads_over_the_points_the_plan_satisfies():
+    history = run(executed_parts, Optimizer("plan", initial=4, trials=4, seed=0))
+    assert [trial.phase for trial in history] == ["design"] * 4
+    pool = sobol_pool(4, 0)
+    satisfying = sum(PARTS.compose(planned_parts(point)) > 0 for point in pool)
+    assert 1 <= satisfying < 3  # the box is small: the pool holds too few for the whole design
+    planned = [PARTS.compose(planned_parts(trial.x)) for trial in history]
+    assert planned[0] > 0 and sum(value > 0 for value in planned[1:]) == satisfying  # those first
+    gaps = [np.linalg.norm(a.x - b.x) for i, a in enumerate(history) for b in history[:i]]
+    assert min(gaps) > 0.05  # and none repeats another
+
+
 def test_method_plan_refuses_parallel_trials():
     with pytest.raises(Exception, match="one trial at a time"):
         Optimizer("plan", initial=4, trials=6, workers=2)
@@ -104,7 +116,7 @@ def test_a_run_with_method_plan_scores_the_plan_on_the_kinematic_backend_and_res
     np.testing.assert_allclose(planned, list(executed.components.values()))  # the kinematic backend executes the plan
     optimise(whole)
     trials = [json.loads(line) for line in (tmp_path / "whole" / "trials.jsonl").read_text().splitlines()]
-    assert [trial["phase"] for trial in trials] == ["plan"] * 4
+    assert [trial["phase"] for trial in trials] == ["design"] + ["plan"] * 3
     assert trials[0]["robustness"] > whole.summary.initial_robustness
     optimise(start_run(task.with_overrides(trials=2), tmp_path / "resumed"))
     optimise(resume_run(tmp_path / "resumed", trials=4))
