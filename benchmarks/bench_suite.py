@@ -12,11 +12,15 @@ dependency of the tool). Every finished run is one line of `benchmarks/results/s
 runs already there are not repeated, so the suite can be stopped and extended. `--table` only
 prints the table of what is recorded. `--search N` runs N uniform random points per problem
 (the large-budget check that a satisfying point exists) into `results/search.jsonl`.
+
+`PROBLEM+lag` runs a kinematic problem with a robot's tracking error (`LaggingBackend`), so
+that the execution is not the plan that method `plan` scores.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import multiprocessing
 import os
@@ -30,6 +34,7 @@ from rich.console import Console
 from rich.table import Table
 
 from stl_lfd.optim.sweep import local_map
+from stl_lfd.sim.kinematic import KinematicBackend
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS_DIR = ROOT / "benchmarks" / "problems"
@@ -61,9 +66,58 @@ def problem_names() -> list[str]:
 
 
 def task_file(problem: str) -> Path:
-    """A suite problem, or a bundled task (`configs/NAME.yaml`) by its name."""
-    path = PROBLEMS_DIR / f"{problem}.yaml"
-    return path if path.exists() else ROOT / "configs" / f"{problem}.yaml"
+    """A suite problem, or a bundled task (`configs/NAME.yaml`) by its name (a `+lag` variant:
+    the problem's file)."""
+    name = problem.partition("+")[0]
+    path = PROBLEMS_DIR / f"{name}.yaml"
+    return path if path.exists() else ROOT / "configs" / f"{name}.yaml"
+
+
+LAG_SECONDS = 0.3  # time constant of the tracking lag
+SAG = np.array([0.0, 0.0, -0.01])  # m: the hand sits this far from where it is sent
+
+
+class LaggingBackend(KinematicBackend):
+    """The kinematic backend with the tracking error of a compliant robot: the hand follows the
+    reference through a first-order lag of LAG_SECONDS and sits SAG below it. The reference
+    (the plan) is unchanged, so its robustness is no longer the execution's."""
+
+    def run(self, reference, scene, rate, observer=None):
+        from scipy.signal import lfilter
+
+        from stl_lfd.signals import SignalTable
+        from stl_lfd.sim.reference import Rollout
+
+        rollout = super().run(reference, scene, rate, observer)
+        times, columns = rollout.signals.times, dict(rollout.signals.columns)
+        keep = float(np.exp(-(times[1] - times[0]) / LAG_SECONDS))
+        sent = np.column_stack([columns[name] for name in ("x", "y", "z")])
+        for axis, name in enumerate(("x", "y", "z")):
+            start = columns[name][0]
+            columns[name] = lfilter([1 - keep], [1, -keep], columns[name] - start) + start + SAG[axis]
+        reached = np.column_stack([columns[name] for name in ("x", "y", "z")])
+        return Rollout(SignalTable(times, columns, source="lagging kinematic rollout"), np.linalg.norm(reached - sent, axis=1))
+
+
+@contextlib.contextmanager
+def executed_as(problem: str):
+    """Within it, the tasks of `problem` execute on its backend (`+lag`: `LaggingBackend` in
+    place of the kinematic one)."""
+    import stl_lfd.optim.run as run
+
+    if not problem.endswith("+lag"):
+        yield
+        return
+    original = run.new_backend
+
+    def lagging(name, command=None):
+        return LaggingBackend() if name == "kinematic" else original(name, command)
+
+    run.new_backend = lagging
+    try:
+        yield
+    finally:
+        run.new_backend = original
 
 
 def run_one(problem: str, method: str, seed: int) -> dict:
@@ -72,13 +126,13 @@ def run_one(problem: str, method: str, seed: int) -> dict:
     _one_thread()
     from stl_lfd.optim import load_task
 
-    task = _with_learned_model(load_task(task_file(problem)), problem)
-    best_x = None
-    if method == "tpe":
-        trials, initial = _run_tpe(task, seed)
-    else:
-        name, initial_trials = method_and_initial(method)
-        trials, initial = _run_tool(task.with_overrides(method=name, seed=seed, initial=initial_trials))
+    task = _with_learned_model(load_task(task_file(problem)), problem.partition("+")[0])
+    with executed_as(problem):
+        if method == "tpe":
+            trials, initial = _run_tpe(task, seed)
+        else:
+            name, initial_trials = method_and_initial(method)
+            trials, initial = _run_tool(task.with_overrides(method=name, seed=seed, initial=initial_trials))
     best_x = max((trial for trial in trials if trial["robustness"] is not None), key=lambda trial: trial["robustness"], default={}).get("x")
     robustness = [trial["robustness"] for trial in trials]
     satisfied = [trial["trial"] for trial in trials if trial["robustness"] is not None and trial["robustness"] > 0]
@@ -210,7 +264,8 @@ def random_search(problem: str, points: int, seed: int = 12345) -> dict:
 
     task = load_task(task_file(problem))
     models = task_models(task)
-    space, objective = objective_for(task, models)
+    with executed_as(problem):
+        space, objective = objective_for(task, models)
     unit = np.random.default_rng(seed).random((points, space.dimension))
     values = []
     for row in unit:

@@ -24,7 +24,8 @@ class TrialPrinter:
             f"{task.backend} backend -> {prepared.run.path}"
         )
         self.console.print(f"unoptimised skill: robustness {initial:+.5f} ({_verdict(initial > 0)})")
-        plan = f"{optimizer.trials} trials: {optimizer.initial} Sobol, then {optimizer.method}"
+        design = "chosen on their plans" if optimizer.method == "plan" else "Sobol"
+        plan = f"{optimizer.trials} trials: {optimizer.initial} {design}, then {optimizer.method}"
         if done >= optimizer.trials:
             self.console.print(plan + f"; the run is complete ({done} trials; raise --iterations to extend it)")
             return

@@ -30,7 +30,8 @@ class Trial:
 
     Attributes:
         trial: 1-based number.
-        phase: `sobol` (the M initial trials), `stl`, `pi`, `logei` or `random`; `explore` for
+        phase: `sobol` (the M initial trials), `stl`, `pi`, `logei` or `random`; with method
+            `plan`, `design` (its M initial trials) then `plan`; `explore` for
             the space-filling trials of method `stl` while it stalls (see `stalled`).
         x: `d` parameter values.
         robustness: the objective, or None when the trial failed.

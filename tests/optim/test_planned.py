@@ -72,6 +72,7 @@ def test_where_the_plan_is_exact_the_first_trial_satisfies():
         assert history[0].satisfied and history[0].phase == "design", seed
 
 
+@pytest.mark.slow
 def test_where_the_plan_is_wrong_the_difference_is_learned_from_the_trials():
     for seed in range(3):
         history = run(executed_parts, Optimizer("plan", initial=4, trials=12, seed=seed))
