@@ -418,7 +418,8 @@ def optimize(
     resume: bool = typer.Option(False, "--resume", help="Continue the run in --out (or runs/<task name>) where it stopped."),
     backend: Optional[BackendOption] = typer.Option(None, help="Execution backend (default: the task's)."),
     method: Optional[MethodOption] = typer.Option(
-        None, help="stl (composite BO on the spec's parts), plan (the same, with each part's plan as its prior), pi (the paper), logei, or random search (default: the task's)."
+        None,
+        help="stl (composite BO on the spec's parts), plan (the same, with each part's plan as its prior), pi (the paper), logei, or random search (default: the task's).",
     ),
     command: Optional[str] = typer.Option(None, "--command", help=COMMAND_HELP),
     command_timeout: Optional[float] = typer.Option(None, "--command-timeout", help=COMMAND_TIMEOUT_HELP),

@@ -118,8 +118,7 @@ def next_points(
     index = len(history) + len(running)
     start, end = batch_of(index, optimizer)
     if optimizer.method == "plan":
-        phase = "design" if index < optimizer.initial else "plan"
-        return [(_planned_point(history, bounds, optimizer, parts, plan, features, phase == "design"), phase)]
+        return _planned_batch(history, running, bounds, optimizer, parts, plan, features)[index - start :]
     if index < optimizer.initial:
         design = sobol_points(bounds, optimizer.initial, optimizer.seed) if initial_design is None else initial_design
         return [(point, "sobol") for point in design[index:end]]
@@ -198,11 +197,44 @@ def _composite_points(
     return points[None] if count == 1 else points
 
 
+def _planned_batch(
+    history: list[Trial],
+    running: Sequence[np.ndarray],
+    bounds: np.ndarray,
+    optimizer: Optimizer,
+    parts: SpecParts | None,
+    plan: Callable | None,
+    features: Callable | None,
+) -> list[tuple[np.ndarray, str]]:
+    """Method `plan`'s batch holding trial index `len(history) + len(running)`: `design`
+    trials while in the initial M, `plan` trials after, each chosen with the batch's earlier
+    points and the points still executing pending (as `next_points` describes)."""
+    index = len(history) + len(running)
+    start, end = batch_of(index, optimizer)
+    observed = batch_of(start - 1, optimizer)[0] if optimizer.workers > 1 and start > 0 else start
+    pending = [trial.x for trial in history[observed:start]] + list(running)[: max(start - len(history), 0)]
+    batch: list[tuple[np.ndarray, str]] = []
+    for number in range(start, end):
+        design = number < optimizer.initial
+        point = _planned_point(history[:observed], bounds, optimizer, parts, plan, features, design, number, pending + [x for x, _ in batch])
+        batch.append((point, "design" if design else "plan"))
+    return batch
+
+
 def _planned_point(
-    history: list[Trial], bounds: np.ndarray, optimizer: Optimizer, parts: SpecParts | None, plan: Callable | None, features: Callable | None, design: bool
+    history: list[Trial],
+    bounds: np.ndarray,
+    optimizer: Optimizer,
+    parts: SpecParts | None,
+    plan: Callable | None,
+    features: Callable | None,
+    design: bool,
+    number: int,
+    pending: list[np.ndarray],
 ) -> np.ndarray:
-    """Method `plan`'s next point (one of the initial `design`'s or not), modelled on the
-    successful trials: a failed one has no difference from its plan to learn."""
+    """Method `plan`'s point for trial index `number` (one of the initial `design`'s or not),
+    modelled on the successful trials of `history` (a failed one has no difference from its
+    plan to learn), with `pending` points executing or chosen for the same batch."""
     from stl_lfd.optim.planned import propose_planned
 
     if plan is None or parts is None:
@@ -218,10 +250,11 @@ def _planned_point(
         outputs = np.hstack([values, route_values])
     X = np.array([trial.x for trial in succeeded]).reshape(-1, bounds.shape[1])
     Y = np.array([trial.robustness for trial in succeeded])
+    tried = np.array([trial.x for trial in history] + pending).reshape(-1, bounds.shape[1])
     return propose_planned(
-        X, outputs, Y, bounds, parts.semantics, len(parts.names), plan, optimizer.seed, optimizer.seed + len(history),
-        getattr(parts, "groups", 1), tuple(route.part for route in routes), features, design,
-        np.array([trial.x for trial in history]).reshape(-1, bounds.shape[1]),
+        X, outputs, Y, bounds, parts.semantics, len(parts.names), plan, optimizer.seed, optimizer.seed + number,
+        getattr(parts, "groups", 1), tuple(route.part for route in routes), features, design, tried,
+        np.array(pending).reshape(-1, bounds.shape[1]),
     )  # fmt: skip
 
 

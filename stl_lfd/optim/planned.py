@@ -38,6 +38,7 @@ POOL = 128  # Sobol candidates whose plans are computed once per run
 # the trials' history carries the search on.
 FIRST_ROUNDS = ((0.1, 0.04, 0.015, 0.006), 4, 8)
 ROUNDS = ((0.08, 0.02), 3, 5)
+PENDING_SPREAD = 0.05  # no point of a batch this close (unit cube, any coordinate) to another
 
 
 class Plan:
@@ -89,6 +90,7 @@ def propose_planned(
     features: Callable | None = None,
     design: bool = False,
     tried: np.ndarray | None = None,
+    pending: np.ndarray | None = None,
 ) -> np.ndarray:
     """The next point (`d`) of method `plan`.
 
@@ -111,6 +113,8 @@ def propose_planned(
         design: whether this trial is one of the initial design's.
         tried: `k x d` points of every trial so far, failed ones too (default: `X`); none is
             proposed again.
+        pending: `p x d` points executing or chosen for the same batch (among `tried`): no
+            point within PENDING_SPREAD of them is proposed, so that a batch spreads out.
     """
     with single_threaded():
         unit = (X - bounds[0]) / (bounds[1] - bounds[0])
@@ -131,8 +135,9 @@ def propose_planned(
             draws = np.clip(centres[:, None, :] + spread * generator.standard_normal((len(centres), draw_count, bounds.shape[1])), 0.0, 1.0)
             draws = draws.reshape(-1, bounds.shape[1])
             candidates, values = np.vstack([candidates, draws]), np.concatenate([values, score(draws)])
-        repeated = np.min(np.abs(candidates[:, None, :] - tried[None, :, :]).max(axis=-1), axis=1) < 1e-9 if len(tried) else np.zeros(len(candidates), bool)
-        values = np.where(repeated, -np.inf, values)  # a point already executed would teach nothing new
+        values = np.where(_within(candidates, tried, 1e-9), -np.inf, values)  # a point already executed would teach nothing new
+        if pending is not None and len(pending):
+            values = np.where(_within(candidates, (pending - bounds[0]) / (bounds[1] - bounds[0]), PENDING_SPREAD), -np.inf, values)
     chosen = candidates[int(np.argmax(values))]
     return np.clip(bounds[0] + chosen * (bounds[1] - bounds[0]), bounds[0], bounds[1])
 
@@ -152,6 +157,14 @@ def spread_point(pool: np.ndarray, plan: Plan, tried: np.ndarray, semantics: Sem
     if not eligible.any():
         eligible = untried & (values >= np.quantile(values[untried], 0.75))
     return pool[int(np.argmax(np.where(eligible, distance, -np.inf)))]
+
+
+def _within(points: np.ndarray, others: np.ndarray, distance: float) -> np.ndarray:
+    """`b` flags: whether each of `b x d` `points` is within `distance` (largest coordinate
+    difference) of one of `k x d` `others`."""
+    if not len(others):
+        return np.zeros(len(points), dtype=bool)
+    return np.min(np.abs(points[:, None, :] - others[None, :, :]).max(axis=-1), axis=1) < distance
 
 
 def sobol_pool(dimension: int, seed: int) -> np.ndarray:

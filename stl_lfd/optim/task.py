@@ -112,8 +112,8 @@ class Optimizer:
             raise ConfigError(f"'optimizer.xi' must be at least 0 (got {self.xi})")
         if not 1 <= self.workers <= MAX_WORKERS:
             raise ConfigError(f"'optimizer.workers' must be from 1 to {MAX_WORKERS} (got {shown(self.workers)})")
-        if self.workers > 1 and self.method in ("pi", "logei", "plan"):
-            raise ConfigError(f"method {self.method} proposes one trial at a time; parallel trials ('optimizer.workers' > 1) need method stl or random")
+        if self.workers > 1 and self.method in ("pi", "logei"):
+            raise ConfigError(f"method {self.method} proposes one trial at a time; parallel trials ('optimizer.workers' > 1) need method stl, plan or random")
 
 
 @dataclass(frozen=True)

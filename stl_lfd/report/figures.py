@@ -113,7 +113,14 @@ def _robustness_curves(axes, run: RunData, label_prefix: str, color: str = "tab:
     initial = np.array([trial.phase in ("sobol", "design") for trial in run.trials], dtype=bool)
     best_so_far = np.fmax.accumulate(np.where(np.isnan(values), -np.inf, values))
     if not label_prefix:
-        axes.scatter(numbers[initial], values[initial], marker="s", color="0.5", label="initial (Sobol)" if run.task.optimizer.method != "plan" else "initial (design)", zorder=3)
+        axes.scatter(
+            numbers[initial],
+            values[initial],
+            marker="s",
+            color="0.5",
+            label="initial (Sobol)" if run.task.optimizer.method != "plan" else "initial (design)",
+            zorder=3,
+        )
         axes.scatter(numbers[~initial], values[~initial], marker="o", color=color, label=f"{run.task.optimizer.method} trials", zorder=3)
     axes.step(numbers, np.where(np.isfinite(best_so_far), best_so_far, np.nan), where="post", color=color, lw=2, label=f"{label_prefix}best so far")
 

@@ -24,12 +24,12 @@ runner = CliRunner()
 TIGHT_SCENE = "description: tight\nsafety:\n  workspace: {lower: [0.2, -0.6, 0.1], upper: [0.8, 0.6, 0.8]}\n  max_speed: 0.6\n"
 
 
-def task_file(tmp_path, model_file, trials=5, scene="free_space", spec="phi1", transitions="none"):
+def task_file(tmp_path, model_file, trials=5, scene="free_space", spec="phi1", transitions="none", method="stl"):
     path = tmp_path / "task.yaml"
     path.write_text(
         f"name: robot\nspec: {ROOT / 'specs' / (spec + '.stl')}\nmodel: {model_file}\nbackend: kinematic\nscene: {scene}\nduration: 22\nrate: 50\n"
         f"parameters:\n  means: {{components: [2, 3]}}\n  durations: {{components: all}}\n  transitions: {transitions}\n"
-        f"optimizer: {{initial: 2, trials: {trials}, seed: 4}}\n"
+        f"optimizer: {{method: {method}, initial: 2, trials: {trials}, seed: 4}}\n"
     )
     return path
 
@@ -58,9 +58,10 @@ def recorded(run):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("transitions", ["none", "band"])  # with the band, method stl models paths
-def test_an_ask_tell_loop_gives_the_trials_of_optimize(tmp_path, learned_model_file, transitions):
-    task, first = start(tmp_path, learned_model_file, transitions=transitions)
+# with the band, method stl models paths; method plan scores plans in the asking process
+@pytest.mark.parametrize(("transitions", "method"), [("none", "stl"), ("band", "stl"), ("none", "plan")])
+def test_an_ask_tell_loop_gives_the_trials_of_optimize(tmp_path, learned_model_file, transitions, method):
+    task, first = start(tmp_path, learned_model_file, transitions=transitions, method=method)
     assert first.trial == 0 and first.reference == tmp_path / "asked" / "executions" / "initial" / "reference.csv"
     tell(tmp_path / "asked", execute_kinematically(first.reference))
     loop(tmp_path / "asked")

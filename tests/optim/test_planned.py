@@ -7,7 +7,7 @@ import pytest
 
 from stl_lfd.optim import load_task, optimise, resume_run, start_run
 from stl_lfd.optim.loop import Outcome, best_trial, run_trials
-from stl_lfd.optim.planned import Plan, propose_planned, sobol_pool
+from stl_lfd.optim.planned import PENDING_SPREAD, Plan, propose_planned, sobol_pool
 from stl_lfd.optim.task import Optimizer
 from stl_lfd.stl import Semantics, parse, split_spec
 from tests.optim.test_run import small_task
@@ -101,9 +101,14 @@ def test_the_design_spreads_over_the_points_the_plan_satisfies():
     assert min(gaps) > 0.05  # and none repeats another
 
 
-def test_method_plan_refuses_parallel_trials():
-    with pytest.raises(Exception, match="one trial at a time"):
-        Optimizer("plan", initial=4, trials=6, workers=2)
+def test_parallel_trials_spread_out_and_resume_exactly_in_the_middle_of_a_batch():
+    optimizer = Optimizer("plan", initial=2, trials=6, seed=0, workers=2)
+    first = run(executed_parts, optimizer)
+    assert [trial.phase for trial in first] == ["design"] * 2 + ["plan"] * 4
+    for a, b in ((first[2], first[3]), (first[4], first[5])):  # the two points of a batch
+        assert np.max(np.abs(a.x - b.x)) >= PENDING_SPREAD
+    resumed = run(executed_parts, optimizer, first[:3])
+    assert np.array_equal([t.x for t in resumed], [t.x for t in first])
 
 
 @pytest.mark.slow
