@@ -412,7 +412,9 @@ def optimize(
     task_file: Path = typer.Argument(..., metavar="TASK_FILE", help="Task file (YAML), e.g. configs/phi1.yaml."),
     spec: Optional[Path] = typer.Option(None, "--spec", help="Use this STL spec instead of the task's."),
     iterations: Optional[int] = typer.Option(None, "--iterations", "-N", help="Total number of trials N (default: the task's)."),
-    init: Optional[int] = typer.Option(None, "--init", "-M", help="Random (Sobol) initial trials M (default: the task's)."),
+    init: Optional[int] = typer.Option(
+        None, "--init", "-M", help="Initial trials M: scrambled Sobol points, or with method plan chosen on their plans (default: the task's)."
+    ),
     seed: Optional[int] = typer.Option(None, "--seed", help="Seed of the initial trials and of the acquisition optimiser."),
     out: Optional[Path] = typer.Option(None, "--out", help="Run directory (default: runs/<task name>)."),
     resume: bool = typer.Option(False, "--resume", help="Continue the run in --out (or runs/<task name>) where it stopped."),
@@ -428,10 +430,12 @@ def optimize(
 ) -> None:
     """Optimise a skill so that its execution satisfies the task's STL specification.
 
-    M scrambled-Sobol trials, then the task's method until N trials: stl models each top-level
-    part of the spec with its own GP and maximises expected improvement of their composition in
-    a trust region; pi is the paper's Algorithm 1 (probability of improvement on one GP of the
-    robustness). Each trial is recorded in the run directory as it finishes; the final
+    M initial trials, then the task's method until N trials: plan (the default) scores the plan
+    of every candidate (its reference, as the kinematic backend executes it) before spending a
+    trial on it, and models how each part of the spec's execution differs from its plan; stl
+    models each top-level part of the spec with its own GP after M scrambled-Sobol trials and
+    maximises expected improvement of their composition in a trust region; pi is the paper's
+    Algorithm 1 (probability of improvement on one GP of the robustness). Each trial is recorded in the run directory as it finishes; the final
     summary.json is printed on stdout.
 
     Examples:
@@ -473,7 +477,9 @@ def ask(
     out: Optional[Path] = typer.Option(None, "--out", help="With a task file: the run directory (default: runs/<task name>)."),
     spec: Optional[Path] = typer.Option(None, "--spec", help="Use this STL spec instead of the task's (a new run only)."),
     iterations: Optional[int] = typer.Option(None, "--iterations", "-N", help="Total number of trials N (default: the task's)."),
-    init: Optional[int] = typer.Option(None, "--init", "-M", help="Random (Sobol) initial trials M (default: the task's)."),
+    init: Optional[int] = typer.Option(
+        None, "--init", "-M", help="Initial trials M: scrambled Sobol points, or with method plan chosen on their plans (default: the task's)."
+    ),
     seed: Optional[int] = typer.Option(None, "--seed", help="Seed of the initial trials and of the acquisition optimiser."),
     method: Optional[MethodOption] = typer.Option(None, help="Optimiser method (default: the task's)."),
 ) -> None:
@@ -518,7 +524,7 @@ def ask(
         print(f"{run_dir}: the run has all its trials (raise --iterations to extend it; stlopt report {run_dir})", file=sys.stderr)
         return
     print(asked.reference)
-    what = "the unoptimised skill" if asked.trial == 0 else f"chosen by {asked.phase}"
+    what = "the unoptimised skill" if asked.trial == 0 else "an initial trial, chosen on its plan" if asked.phase == "design" else f"chosen by {asked.phase}"
     state = "still pending" if asked.again else "to execute"
     print(f"trial {asked.trial} ({what}) {state}; then: stlopt tell {run_dir} SIGNALS.csv", file=sys.stderr)
 

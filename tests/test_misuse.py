@@ -288,7 +288,7 @@ CASES = [
         "resume-other-method",
         ["optimize", "{task}", "--out", "{run}", "--resume", "--method", "pi"],
         9,
-        "--method cannot change on --resume (the run has stl, got pi)",
+        "--method cannot change on --resume (the run has plan, got pi)",
     ),
     Case("resume-other-backend", ["optimize", "{task}", "--out", "{run}", "--resume", "--backend", "pybullet"], 9, "--backend cannot change on --resume"),
     Case("resume-other-init", ["optimize", "{task}", "--out", "{run}", "--resume", "--init", "1"], 9, "--init cannot change on --resume"),

@@ -4,6 +4,8 @@
 - `space`: which parameters move, their bounds, and how a point becomes a model;
 - `acquisition`: Sobol and random points, GP fitting and acquisition maximisation (BoTorch);
 - `composite`: method `stl`, one GP output per part of the spec;
+- `planned`: method `plan`, the same with each part's plan (its reference scored as the
+  kinematic backend executes it) as the prior;
 - `features`: what method `stl`'s GP sees of a point (the state path it selects, the means on
   it and when each of its states starts);
 - `loop`: the trial loop;

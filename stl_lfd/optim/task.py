@@ -85,11 +85,13 @@ def _check_states(components: tuple[int, ...], key: str) -> None:
 
 @dataclass(frozen=True)
 class Optimizer:
-    """Algorithm 1's budget: `initial` (M) Sobol trials, then `method` until `trials` (N).
-    `stl` (composite BO on the spec's parts) is the default; `pi` is the paper's algorithm.
-    `workers` trials run at once, each batch proposed together (methods stl and random)."""
+    """Algorithm 1's budget: `initial` (M) initial trials (scrambled Sobol points; with method
+    `plan`, chosen on their plans), then `method` until `trials` (N). `plan` (composite BO on
+    the spec's parts with each part's plan as its prior) is the default; `stl` is the same
+    without plans; `pi` is the paper's algorithm. `workers` trials run at once, each batch
+    proposed together (methods plan, stl and random)."""
 
-    method: str = "stl"
+    method: str = "plan"
     initial: int = 8
     trials: int = 32
     seed: int = 0

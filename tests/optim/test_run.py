@@ -21,7 +21,7 @@ def small_task(tmp_path: Path, model_file: Path, spec: str = "phi1", duration: f
         f"name: small\nspec: {ROOT / 'specs' / (spec + '.stl')}\nmodel: {model_file}\nbackend: kinematic\n"
         f"duration: {duration}\nrate: 50\n"
         "parameters:\n  means: {components: [2, 3]}\n  durations: {components: all}\n"
-        "optimizer: {initial: 3, trials: 5, seed: 2}\n" + extra
+        "optimizer: {method: stl, initial: 3, trials: 5, seed: 2}\n" + extra
     )
     return path
 
@@ -202,7 +202,7 @@ def test_a_run_on_transitions_models_paths_and_resumes_exactly(tmp_path, learned
     path = small_task(tmp_path, learned_model_file)
     path.write_text(
         path.read_text()
-        .replace("optimizer: {initial: 3, trials: 5, seed: 2}", "optimizer: {initial: 3, trials: 6, seed: 2}")
+        .replace("optimizer: {method: stl, initial: 3, trials: 5, seed: 2}", "optimizer: {method: stl, initial: 3, trials: 6, seed: 2}")
         .replace("  durations: {components: all}\n", "  durations: {components: all}\n" + extra)
     )
     task = load_task(path).with_overrides(method="stl")

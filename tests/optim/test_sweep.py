@@ -126,7 +126,7 @@ def test_variants_change_task_keys_and_bad_sweeps_are_refused(tmp_path, learned_
         ("tasks: [small.yaml]\nbackend: mujoco\n", "'backend' must be one of"),
         ("tasks: [small.yaml]\ncolour: red\n", "unknown key 'colour'"),
         ("tasks: [small.yaml]\nvariants:\n  bad: {parameters: {means: {beta: -1}}}\n", "(variant bad of bad.yaml)"),
-        ("tasks: [small.yaml, small.yaml]\n", "two cells are both called small-stl-seed0"),
+        ("tasks: [small.yaml, small.yaml]\n", "two cells are both called small-plan-seed0"),
     ]:
         bad = tmp_path / "bad.yaml"
         bad.write_text(text)

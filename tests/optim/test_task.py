@@ -13,7 +13,7 @@ CONFIGS = ROOT / "configs"
 def test_the_paper_tasks_select_the_paper_parameter_sets(name, dimension, learned_model):
     task = load_task(CONFIGS / f"{name}.yaml")
     assert task.spec == CONFIGS / ".." / "specs" / f"{name}.stl"
-    assert task.optimizer.initial == 8 and task.optimizer.trials == 32 and task.optimizer.method == "stl"
+    assert task.optimizer.initial == 8 and task.optimizer.trials == 32 and task.optimizer.method == "plan"
     assert task.semantics == "new"
     assert build_search_space({"skill": learned_model}, task.parameters).dimension == dimension
 
