@@ -33,7 +33,8 @@ from stl_lfd.stl import Semantics
 
 POOL = 128  # Sobol candidates whose plans are computed once per run
 # Refinement rounds: the standard deviation (unit cube) of each round's draws, how many of the
-# best candidates are perturbed, and how many draws around each. The first trial, chosen by the
+# best candidates are perturbed (after the first trial, the best trial too), and how many
+# draws around each. The first trial, chosen by the
 # plan alone, gets a longer search (once per run); later ones stay cheap, about 30 plans, as
 # the trials' history carries the search on.
 FIRST_ROUNDS = ((0.1, 0.04, 0.015, 0.006), 4, 8)
@@ -132,6 +133,8 @@ def propose_planned(
         spreads, centre_count, draw_count = ROUNDS if len(X) else FIRST_ROUNDS
         for spread in spreads:
             centres = candidates[np.argsort(-values, kind="stable")[:centre_count]]
+            if len(Y):  # and the best trial, whose neighbourhood the acquisition may rank lower
+                centres = np.vstack([unit[int(np.argmax(Y))], centres])
             draws = np.clip(centres[:, None, :] + spread * generator.standard_normal((len(centres), draw_count, bounds.shape[1])), 0.0, 1.0)
             draws = draws.reshape(-1, bounds.shape[1])
             candidates, values = np.vstack([candidates, draws]), np.concatenate([values, score(draws)])
