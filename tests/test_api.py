@@ -63,7 +63,7 @@ def test_optimize_from_objects_reproduces_the_command_lines_trials(tmp_path, lea
         learned_model,
         stl_lfd.Spec.parse(regions + "\n" + phi1),
         stl_lfd.Parameters(means=stl_lfd.MeanParameters(components=(2, 3)), durations=stl_lfd.DurationParameters(components="all")),
-        stl_lfd.Optimizer(initial=3, trials=5, seed=2),
+        stl_lfd.Optimizer("stl", initial=3, trials=5, seed=2),
         duration=22,
         rate=50,
         backend="kinematic",
@@ -81,7 +81,7 @@ def test_optimize_with_a_run_directory_records_a_run_the_command_line_continues(
     run = tmp_path / "python"
     settings = dict(duration=22, rate=50, backend="kinematic", out=run)
     parameters = stl_lfd.Parameters(means=stl_lfd.MeanParameters(components=(2, 3)), durations=stl_lfd.DurationParameters(components="all"))
-    result = stl_lfd.optimize(learned_model, ROOT / "specs" / "phi1.stl", parameters, stl_lfd.Optimizer(initial=3, trials=5, seed=2), **settings)
+    result = stl_lfd.optimize(learned_model, ROOT / "specs" / "phi1.stl", parameters, stl_lfd.Optimizer("stl", initial=3, trials=5, seed=2), **settings)
     assert stl_lfd.Spec.load(run / "spec.stl").tree == stl_lfd.Spec.load(ROOT / "specs" / "phi1.stl").tree
     on_disk = [json.loads(line)["robustness"] for line in (run / "trials.jsonl").read_text().splitlines()]
     assert on_disk == [trial.robustness for trial in result.history]
