@@ -170,14 +170,10 @@ def composed_log_ei(
     routes: output `parts + k` implies part `route_parts[k]`, whose sample is raised to the
     route's where that is larger. With `features`, the model's inputs are `features(X)`.
     """
-    import math
 
-    import torch
     from botorch.acquisition import AcquisitionFunction
-    from torch.quasirandom import SobolEngine
 
-    unit = SobolEngine(parts + len(route_parts), scramble=True, seed=seed).draw(MC_SAMPLES, dtype=torch.float64)
-    normal = torch.distributions.Normal(0.0, 1.0).icdf(unit.clamp(1e-6, 1 - 1e-6))  # S x m
+    normal = qmc_normals(parts + len(route_parts), seed)  # S x m
     temperature = 0.01 * scale
     posterior = posterior if posterior is not None else PartsPosterior(model)
     encode = features if features is not None else (lambda points: points)
@@ -187,11 +183,31 @@ def composed_log_ei(
             mean, std = posterior(encode(X[..., 0, :]))  # b x m each
             samples = mean.unsqueeze(-2) + std.unsqueeze(-2) * normal  # b x S x (m + r)
             samples = _through_routes(samples, parts, route_parts)  # b x S x m
-            improvement = (compose(samples, semantics, groups) - best) / temperature  # b x S
-            log_softplus = torch.where(improvement < -30, improvement, torch.nn.functional.softplus(improvement).clamp_min(1e-300).log())
-            return torch.logsumexp(log_softplus, dim=-1) - math.log(MC_SAMPLES) + math.log(temperature)
+            return log_soft_improvement(compose(samples, semantics, groups), best, temperature)
 
     return ComposedLogEI(model)
+
+
+def qmc_normals(outputs: int, seed: int):
+    """`MC_SAMPLES x outputs` fixed standard normal draws (scrambled Sobol, then the inverse CDF)."""
+    import torch
+    from torch.quasirandom import SobolEngine
+
+    unit = SobolEngine(outputs, scramble=True, seed=seed).draw(MC_SAMPLES, dtype=torch.float64)
+    return torch.distributions.Normal(0.0, 1.0).icdf(unit.clamp(1e-6, 1 - 1e-6))
+
+
+def log_soft_improvement(composed, best: float, temperature: float):
+    """`... x S` composed samples -> `...`: the log of their mean improvement over `best`, the
+    ReLU smoothed by a softplus of `temperature` as in LogEI, so that it keeps a gradient far
+    from improvement."""
+    import math
+
+    import torch
+
+    improvement = (composed - best) / temperature
+    log_softplus = torch.where(improvement < -30, improvement, torch.nn.functional.softplus(improvement).clamp_min(1e-300).log())
+    return torch.logsumexp(log_softplus, dim=-1) - math.log(MC_SAMPLES) + math.log(temperature)
 
 
 def _through_routes(samples, parts: int, route_parts: tuple[int, ...]):

@@ -28,7 +28,7 @@ from typing import Callable
 import numpy as np
 
 from stl_lfd.optim.acquisition import single_threaded
-from stl_lfd.optim.composite import MC_SAMPLES, PartsPosterior, _through_routes, compose, fit_multi_output_gp
+from stl_lfd.optim.composite import PartsPosterior, _through_routes, compose, fit_multi_output_gp, log_soft_improvement, qmc_normals
 from stl_lfd.stl import Semantics
 
 POOL = 128  # Sobol candidates whose plans are computed once per run
@@ -216,26 +216,19 @@ def _scorer(difference, plan: Plan, best: float, scale: float, semantics: Semant
     of the composed samples of plan + difference (as `composite.composed_log_ei`), or the
     composed mean before any trial; -inf where there is no plan."""
     import torch
-    from torch.quasirandom import SobolEngine
+
+    normal = None  # S x o, drawn once the number of outputs is known
 
     def score(points: np.ndarray) -> np.ndarray:
+        nonlocal normal
         planned = plan(points)  # b x o
         mean, std = difference(points)
-        outputs = planned.shape[1]
-        unit = SobolEngine(outputs, scramble=True, seed=seed).draw(MC_SAMPLES, dtype=torch.float64)
-        normal = torch.distributions.Normal(0.0, 1.0).icdf(unit.clamp(1e-6, 1 - 1e-6))  # S x o
+        normal = qmc_normals(planned.shape[1], seed) if normal is None else normal
         centre = torch.as_tensor(planned + mean, dtype=torch.float64)
         spread = torch.as_tensor(std, dtype=torch.float64)
         samples = _through_routes(centre.unsqueeze(-2) + spread.unsqueeze(-2) * normal, parts, route_parts)
         composed = compose(torch.nan_to_num(samples, nan=-1e9), semantics, groups)  # b x S
-        if not math.isfinite(best):
-            values = composed.mean(dim=-1)
-        else:
-            temperature = 0.01 * scale
-            improvement = (composed - best) / temperature
-            log_softplus = torch.where(improvement < -30, improvement, torch.nn.functional.softplus(improvement).clamp_min(1e-300).log())
-            values = torch.logsumexp(log_softplus, dim=-1)
-        values = values.numpy()
-        return np.where(np.isfinite(planned).all(axis=1), values, -np.inf)
+        values = composed.mean(dim=-1) if not math.isfinite(best) else log_soft_improvement(composed, best, 0.01 * scale)
+        return np.where(np.isfinite(planned).all(axis=1), values.numpy(), -np.inf)
 
     return score

@@ -92,11 +92,14 @@ def test_method_plan_is_reproducible_and_resumes_exactly():
 def test_the_design_spreads_over_the_points_the_plan_satisfies():
     history = run(executed_parts, Optimizer("plan", initial=4, trials=4, seed=0))
     assert [trial.phase for trial in history] == ["design"] * 4
-    pool = sobol_pool(4, 0)
-    satisfying = sum(PARTS.compose(planned_parts(point)) > 0 for point in pool)
-    assert 1 <= satisfying < 3  # the box is small: the pool holds too few for the whole design
+    pool_values = np.array([PARTS.compose(planned_parts(point)) for point in sobol_pool(4, 0)])
+    satisfying = int(np.sum(pool_values > 0))
     planned = [PARTS.compose(planned_parts(trial.x)) for trial in history]
-    assert planned[0] > 0 and sum(value > 0 for value in planned[1:]) == satisfying  # those first
+    assert planned[0] > 0  # the plan search's best
+    # the pool's satisfying points come first; when they run out, points of its best quarter
+    spread = planned[1:]
+    assert all(value > 0 for value in spread[:satisfying]) and sum(value > 0 for value in spread) == min(satisfying, 3)
+    assert all(value >= np.quantile(pool_values, 0.7) for value in spread)
     gaps = [np.linalg.norm(a.x - b.x) for i, a in enumerate(history) for b in history[:i]]
     assert min(gaps) > 0.05  # and none repeats another
 
