@@ -170,7 +170,6 @@ def composed_log_ei(
     routes: output `parts + k` implies part `route_parts[k]`, whose sample is raised to the
     route's where that is larger. With `features`, the model's inputs are `features(X)`.
     """
-
     from botorch.acquisition import AcquisitionFunction
 
     normal = qmc_normals(parts + len(route_parts), seed)  # S x m

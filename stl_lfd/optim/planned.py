@@ -34,9 +34,8 @@ from stl_lfd.stl import Semantics
 POOL = 128  # Sobol candidates whose plans are computed once per run
 # Refinement rounds: the standard deviation (unit cube) of each round's draws, how many of the
 # best candidates are perturbed (after the first trial, the best trial too), and how many
-# draws around each. The first trial, chosen by the
-# plan alone, gets a longer search (once per run); later ones stay cheap, about 30 plans, as
-# the trials' history carries the search on.
+# draws around each. The first trial, chosen by the plan alone, gets a longer search (once per
+# run); later ones stay cheap, 40 plans, as the trials' history carries the search on.
 FIRST_ROUNDS = ((0.1, 0.04, 0.015, 0.006), 4, 8)
 ROUNDS = ((0.08, 0.02), 3, 5)
 PENDING_SPREAD = 0.05  # no point of a batch this close (unit cube, any coordinate) to another
@@ -131,10 +130,9 @@ def propose_planned(
         values = score(candidates)
         generator = np.random.default_rng([seed, trial_seed])
         spreads, centre_count, draw_count = ROUNDS if len(X) else FIRST_ROUNDS
+        best_trial = unit[np.argmax(Y, keepdims=True)] if len(Y) else unit[:0]  # its neighbourhood may rank lower
         for spread in spreads:
-            centres = candidates[np.argsort(-values, kind="stable")[:centre_count]]
-            if len(Y):  # and the best trial, whose neighbourhood the acquisition may rank lower
-                centres = np.vstack([unit[int(np.argmax(Y))], centres])
+            centres = np.vstack([best_trial, candidates[np.argsort(-values, kind="stable")[:centre_count]]])
             draws = np.clip(centres[:, None, :] + spread * generator.standard_normal((len(centres), draw_count, bounds.shape[1])), 0.0, 1.0)
             draws = draws.reshape(-1, bounds.shape[1])
             candidates, values = np.vstack([candidates, draws]), np.concatenate([values, score(draws)])
@@ -217,13 +215,11 @@ def _scorer(difference, plan: Plan, best: float, scale: float, semantics: Semant
     composed mean before any trial; -inf where there is no plan."""
     import torch
 
-    normal = None  # S x o, drawn once the number of outputs is known
+    normal = qmc_normals(parts + len(route_parts), seed)  # S x o
 
     def score(points: np.ndarray) -> np.ndarray:
-        nonlocal normal
         planned = plan(points)  # b x o
         mean, std = difference(points)
-        normal = qmc_normals(planned.shape[1], seed) if normal is None else normal
         centre = torch.as_tensor(planned + mean, dtype=torch.float64)
         spread = torch.as_tensor(std, dtype=torch.float64)
         samples = _through_routes(centre.unsqueeze(-2) + spread.unsqueeze(-2) * normal, parts, route_parts)
