@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run test test-fast lint bench bench-optim clean
+.PHONY: run test test-fast lint docs bench bench-optim clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -29,20 +29,26 @@ run: $(STAMP)
 	@echo "Watch the result: $(BIN)/stlopt replay $(RUN_DIR)/phi1 --video $(RUN_DIR)/phi1-best.mp4"
 
 # Two test processes (one per core), each single-threaded: BLAS and torch threads of two
-# processes would otherwise compete for the same two cores. The README's examples run in one
-# worker (each follows the examples before it); the other tests are handed out one at a time,
-# the longest first (tests/conftest.py), so that both workers stay busy to the end.
+# processes would otherwise compete for the same two cores. The console examples of each page
+# (README, docs/) run in one worker (each follows the examples before it); the other tests are
+# handed out one at a time, the longest first (tests/conftest.py), so that both workers stay
+# busy to the end.
 PYTEST := OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 $(BIN)/python -m pytest -q -n 2 --dist loadgroup
 
-test: $(STAMP) lint
+test: $(STAMP) lint docs
 	$(PYTEST)
 
-test-fast: $(STAMP) lint
+test-fast: $(STAMP) lint docs
 	$(PYTEST) -m "not slow"
 
 lint: $(STAMP)
 	$(BIN)/ruff check stl_lfd tests benchmarks examples
 	$(BIN)/ruff format --check stl_lfd tests benchmarks examples
+
+# The documentation site (mkdocs.yml, docs/): strict, so a broken link or a docstring the API
+# pages cannot render fails the build; offline (no theme fonts or plugins that fetch).
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet --site-dir site
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks
@@ -55,4 +61,4 @@ bench-optim: $(STAMP)
 	$(BIN)/python -m benchmarks.bench_suite --jobs 2
 
 clean:
-	rm -rf $(VENV) runs .pytest_cache .hypothesis
+	rm -rf $(VENV) runs site .pytest_cache .hypothesis

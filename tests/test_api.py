@@ -1,5 +1,5 @@
-"""The public Python API: the README's examples run, `optimize` from objects reproduces the
-command line's trials, and settings are checked when objects are made."""
+"""The public Python API: the examples of the Python API page (docs/api.md) run, `optimize`
+from objects reproduces the command line's trials, and settings are checked when objects are made."""
 
 from __future__ import annotations
 
@@ -19,21 +19,19 @@ from tests.conftest import ROOT
 from tests.optim.test_run import small_task
 
 
-def readme_python_blocks() -> list[str]:
-    text = (ROOT / "README.md").read_text()
-    section = text[text.index("## Python API") :]
-    section = section[: section.index("\n## ", 1)]
-    return re.findall(r"```python\n(.*?)```", section, flags=re.S)
+def api_page_python_blocks() -> list[str]:
+    """The Python examples of the documentation's Python API page, in order."""
+    return re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "api.md").read_text(), flags=re.S)
 
 
 @pytest.mark.slow
-def test_the_readme_python_examples_run(monkeypatch, capsys):
-    blocks = readme_python_blocks()
+def test_the_api_page_python_examples_run(monkeypatch, capsys):
+    blocks = api_page_python_blocks()
     assert len(blocks) == 4
     monkeypatch.chdir(ROOT)
     namespace: dict = {}
     for block in blocks:
-        exec(compile(block, "README.md", "exec"), namespace)
+        exec(compile(block, "docs/api.md", "exec"), namespace)
     printed = capsys.readouterr().out.splitlines()
     assert float(printed[1]) == pytest.approx(-0.31)
     assert namespace["result"].best_robustness >= namespace["result"].initial_robustness
