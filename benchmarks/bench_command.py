@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 from benchmarks._timing import Row, print_table
-from stl_lfd.optim import load_task, optimise, start_run
+from stl_lfd.optim import finish_run, load_task, start_run
 from stl_lfd.sim import Command
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -24,7 +24,7 @@ EXECUTOR = ROOT / "examples" / "pybullet_executor.py"
 
 def timed_run(task, folder: Path) -> tuple[float, list[dict]]:
     start = time.perf_counter()
-    optimise(start_run(task, folder))
+    finish_run(start_run(task, folder))
     seconds = time.perf_counter() - start
     return seconds, [json.loads(line) for line in (folder / "trials.jsonl").read_text().splitlines()]
 

@@ -25,9 +25,11 @@ from rich.console import Console
 from rich.table import Table
 
 from benchmarks._timing import Row, print_table
-from stl_lfd.optim import load_task, optimise, start_run
-from stl_lfd.optim.acquisition import propose
-from stl_lfd.optim.sweep import local_map
+from stl_lfd.optim import finish_run, load_task, start_run
+from stl_lfd.optim.methods.analytic import ProbabilityOfImprovement
+from stl_lfd.optim.methods.base import Problem, Request
+from stl_lfd.optim.settings import Optimizer
+from stl_lfd.optim.runs.sweep import local_map
 
 ROOT = Path(__file__).resolve().parent.parent
 # Workers are spawned, not forked: forking after torch or pybullet started threads deadlocks.
@@ -40,11 +42,12 @@ def overhead_seconds(repeats: int = 7) -> float:
     bounds = np.vstack([np.zeros(21), np.ones(21)])
     X = rng.random((30, 21))
     Y = -np.linalg.norm(X - 0.3, axis=1) + 0.01 * rng.standard_normal(30)
-    propose(X, Y, bounds, "pi", 0.1, 0)
+    method = ProbabilityOfImprovement(Problem(bounds), Optimizer(method="pi", initial=1, trials=100))
+    method.search(Request([], np.empty((0, 21)), 30, 1, 0), X, Y)
     times = []
     for seed in range(repeats):
         start = time.perf_counter()
-        propose(X, Y, bounds, "pi", 0.1, seed)
+        method.search(Request([], np.empty((0, 21)), 30, 1, seed), X, Y)
         times.append(time.perf_counter() - start)
     return statistics.median(times)
 
@@ -57,7 +60,7 @@ def one_run(arguments: tuple[str, str, str, str, int]) -> dict:
     task = load_task(ROOT / "configs" / f"{spec}.yaml").with_overrides(method=method, backend=backend, seed=seed)
     task = replace(task, semantics=semantics)
     with tempfile.TemporaryDirectory() as folder:
-        summary = optimise(start_run(task, Path(folder) / "run"))
+        summary = finish_run(start_run(task, Path(folder) / "run"))
         trials = [json.loads(line) for line in (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()]
     proposed = [trial["optimizer_seconds"] for trial in trials if trial["phase"] != "sobol"]
     timing = {"optimizer_median": statistics.median(proposed), "rollout_median": statistics.median(trial["rollout_seconds"] for trial in trials)}

@@ -18,8 +18,8 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from stl_lfd.optim import RunDirectory, load_task, optimise, start_run
-from stl_lfd.optim.sweep import local_map
+from stl_lfd.optim import RunDirectory, finish_run, load_task, start_run
+from stl_lfd.optim.runs.sweep import local_map
 from stl_lfd.report.figures import followed_states
 from stl_lfd.signals import read_signal_csv
 from stl_lfd.stl import load_spec
@@ -47,7 +47,7 @@ def one_run(arguments: tuple[str, int]) -> dict:
     warnings.simplefilter("ignore")
     task = load_task(ROOT / "configs" / f"{spec}.yaml").with_overrides(seed=seed)
     with tempfile.TemporaryDirectory() as folder:
-        summary = optimise(start_run(task, Path(folder) / "run"))
+        summary = finish_run(start_run(task, Path(folder) / "run"))
         run = RunDirectory(Path(folder) / "run")
         before = insertion_and_pick(run.signals_path(0))
         best = summary.best_trial

@@ -26,7 +26,7 @@ from rich.console import Console
 from rich.table import Table
 
 from stl_lfd.hsmm import learn_from_folder
-from stl_lfd.optim.sweep import local_map
+from stl_lfd.optim.runs.sweep import local_map
 from stl_lfd.poses import Pose
 from stl_lfd.sim import TrackingWarning, execute, load_scene
 from stl_lfd.skill.behaviour import load_behaviour, reference_for

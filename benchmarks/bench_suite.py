@@ -33,7 +33,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from stl_lfd.optim.sweep import local_map
+from stl_lfd.optim.runs.sweep import local_map
 from stl_lfd.sim.kinematic import KinematicBackend
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -103,7 +103,7 @@ class LaggingBackend(KinematicBackend):
 def executed_as(problem: str):
     """Within it, the tasks of `problem` execute on its backend (`+lag`: `LaggingBackend` in
     place of the kinematic one)."""
-    import stl_lfd.optim.run as run
+    import stl_lfd.optim.objective as run
 
     if not problem.endswith("+lag"):
         yield
@@ -212,11 +212,11 @@ def _learning_digest(demos: Path, states: int) -> str:
 def _run_tool(task) -> tuple[list[dict], float]:
     import tempfile
 
-    from stl_lfd.optim import optimise, start_run
+    from stl_lfd.optim import finish_run, start_run
 
     with tempfile.TemporaryDirectory() as folder:
         prepared = start_run(task, Path(folder) / "run")
-        optimise(prepared)
+        finish_run(prepared)
         trials = [json.loads(line) for line in (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()]
         return trials, prepared.summary.initial_robustness
 
@@ -224,7 +224,7 @@ def _run_tool(task) -> tuple[list[dict], float]:
 def _run_tpe(task, seed: int) -> tuple[list[dict], float]:
     import optuna
 
-    from stl_lfd.optim.run import objective_for, task_models
+    from stl_lfd.optim.objective import objective_for, task_models
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     models = task_models(task)
@@ -260,7 +260,7 @@ def random_search(problem: str, points: int, seed: int = 12345) -> dict:
     """The best of `points` uniform random points: evidence that the problem can be solved."""
     warnings.simplefilter("ignore")
     from stl_lfd.optim import load_task
-    from stl_lfd.optim.run import objective_for, task_models
+    from stl_lfd.optim.objective import objective_for, task_models
 
     task = load_task(task_file(problem))
     models = task_models(task)

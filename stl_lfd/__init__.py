@@ -39,10 +39,10 @@ _HOMES = {
     "rollout_model": "stl_lfd.skill",
     "optimize": "stl_lfd.optim.api",
     "Result": "stl_lfd.optim.api",
-    "Parameters": "stl_lfd.optim.task",
-    "MeanParameters": "stl_lfd.optim.task",
-    "DurationParameters": "stl_lfd.optim.task",
-    "Optimizer": "stl_lfd.optim.task",
+    "Parameters": "stl_lfd.optim.settings",
+    "MeanParameters": "stl_lfd.optim.settings",
+    "DurationParameters": "stl_lfd.optim.settings",
+    "Optimizer": "stl_lfd.optim.settings",
     "load_task": "stl_lfd.optim.task",
 }
 

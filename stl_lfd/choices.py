@@ -4,5 +4,4 @@ the command line builds its choices from them. A leaf module (no imports), so th
 
 SEMANTICS = ("classic", "new")  # space robustness; the robustness of Varnai & Dimarogonas
 BACKENDS = ("pybullet", "kinematic", "command")  # a simulated Panda; the reference itself; an external program
-METHODS = ("stl", "plan", "pi", "logei", "random")  # optimiser methods (plan is the default)
 RECORDED_SIGNALS = ("x", "y", "z", "gripper", "force")  # what every rollout records

@@ -21,8 +21,9 @@ from typing import Iterator, Optional
 import typer
 from typer.core import TyperArgument, TyperCommand
 
-from stl_lfd.choices import BACKENDS, METHODS, SEMANTICS
+from stl_lfd.choices import BACKENDS, SEMANTICS
 from stl_lfd.errors import ConfigError, ExecutionError, ModelError, StlLfdError
+from stl_lfd.optim.methods import method_names
 
 
 class _PlainUsage(TyperCommand):
@@ -50,7 +51,7 @@ def _choices(name: str, values: tuple[str, ...]) -> type[Enum]:
 
 SemanticsOption = _choices("SemanticsOption", SEMANTICS)
 BackendOption = _choices("BackendOption", BACKENDS)
-MethodOption = _choices("MethodOption", METHODS)
+MethodOption = _choices("MethodOption", method_names())
 
 
 def _print_warning(message, category, filename, lineno, file=None, line=None) -> None:
@@ -444,29 +445,28 @@ def optimize(
         stlopt optimize configs/phi1.yaml --seed 3 --out runs/phi1-seed3
         stlopt optimize configs/phi1.yaml --out runs/phi1-seed3 --resume -N 48
     """
-    from stl_lfd.optim import load_task, optimise, resume_run, start_run
-    from stl_lfd.optim.resume import inputs_record
+    from stl_lfd.optim import Overrides, finish_run, load_task, resume_run, start_run
+    from stl_lfd.optim.runs.resume import inputs_record
     from stl_lfd.progress import TrialPrinter
 
-    given = dict(
-        spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None, workers=workers
-    )  # fmt: skip
     with user_errors():
         file_task = load_task(task_file)
-        given["command"] = _command(command, command_timeout, file_task.command)
-        given["placements"] = _placements(file_task.scene, place)
+        given = Overrides(
+            spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None,
+            workers=workers, command=_command(command, command_timeout, file_task.command), placements=_placements(file_task.scene, place),
+        )  # fmt: skip
         run_dir = out or Path("runs") / file_task.name
         if resume:
             prepared = resume_run(run_dir, iterations, file_task, given)
         else:
-            task = file_task.with_overrides(**given)
-            if given["command"] is not None and task.backend != "command":
+            task = given.applied_to(file_task)
+            if given.command is not None and task.backend != "command":
                 raise ConfigError(f"--command is for --backend command (the run's backend is {task.backend})")
             prepared = start_run(task, run_dir, lambda message: print(message, file=sys.stderr), inputs_record(file_task, given, task))
     again = f"stlopt optimize {task_file} --out {run_dir} --resume"
     with prepared, user_errors(on_interrupt=f"interrupted; the finished trials are kept. Continue with: {again}"):
         printer = TrialPrinter(prepared)
-        summary = optimise(prepared, printer.trial)
+        summary = finish_run(prepared, printer.trial)
         printer.done(summary)
     print(json.dumps(summary.to_json(), indent=2))
 
@@ -497,19 +497,19 @@ def ask(
         stlopt ask configs/phi1.yaml --out runs/robot
         stlopt ask runs/robot
     """
-    from stl_lfd.optim import load_task
-    from stl_lfd.optim.asktell import ask as ask_trial
-    from stl_lfd.optim.asktell import ask_new
-    from stl_lfd.optim.resume import inputs_record
+    from stl_lfd.optim import Overrides, load_task
+    from stl_lfd.optim.runs.asktell import ask as ask_trial
+    from stl_lfd.optim.runs.asktell import ask_new
+    from stl_lfd.optim.runs.resume import inputs_record
 
-    given = dict(spec=spec, seed=seed, initial=init, trials=iterations, method=method.value if method else None)
+    given = Overrides(spec=spec, seed=seed, initial=init, trials=iterations, method=method.value if method else None)
 
     def refused(trial) -> None:
         print(f"trial {trial.trial} refused: {trial.error}", file=sys.stderr)
 
     with user_errors():
         if target.is_dir():
-            if out is not None or any(value is not None for key, value in given.items() if key != "trials"):
+            if out is not None or set(given.given()) - {"trials"}:
                 raise ConfigError(f"{target}: a run directory keeps its own settings; only --iterations may be given with it")
             run_dir, asked = target, ask_trial(target, iterations, on_refused=refused)
         else:
@@ -518,7 +518,7 @@ def ask(
             if run_dir.is_dir() and any(run_dir.iterdir()):
                 asked = ask_trial(run_dir, iterations, file_task, given, on_refused=refused)
             else:
-                task = file_task.with_overrides(**given)
+                task = given.applied_to(file_task)
                 asked = ask_new(task, run_dir, inputs_record(file_task, given, task), lambda message: print(message, file=sys.stderr))
     if asked is None:
         print(f"{run_dir}: the run has all its trials (raise --iterations to extend it; stlopt report {run_dir})", file=sys.stderr)
@@ -544,7 +544,7 @@ def tell(
         stlopt tell runs/robot signals.csv
         stlopt tell runs/robot --failed "protective stop at t=4 s"
     """
-    from stl_lfd.optim.asktell import tell as tell_trial
+    from stl_lfd.optim.runs.asktell import tell as tell_trial
 
     with user_errors():
         if (signals is None) == (failed is None):
@@ -589,7 +589,8 @@ def sweep(
         stlopt sweep sweeps/phi1_methods.yaml --ray auto
     """
     from stl_lfd.files import check_output_folder
-    from stl_lfd.optim.sweep import load_sweep, local_results, ray_results, run_sweep
+    from stl_lfd.optim.runs.sweep import local_results, ray_results, run_sweep
+    from stl_lfd.optim.runs.sweep_file import load_sweep
     from stl_lfd.report.sweep import TABLE_HEADER, sweep_groups, table_rows, write_sweep_figure
 
     with user_errors():

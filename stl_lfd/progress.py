@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from rich.console import Console
 
-from stl_lfd.optim.loop import Trial
-from stl_lfd.optim.run import PreparedRun
+from stl_lfd.optim.runs.prepare import PreparedRun
 from stl_lfd.optim.summary import Summary
+from stl_lfd.optim.trials import Trial
 
 
 class TrialPrinter:

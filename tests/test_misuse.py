@@ -422,13 +422,13 @@ CASES = [
 @pytest.fixture(scope="module")
 def workspace(tmp_path_factory, learned_model_file) -> dict[str, Path]:
     """The shared inputs: a model, a valid task and a finished 3-trial run."""
-    from stl_lfd.optim import load_task, optimise, start_run
+    from stl_lfd.optim import finish_run, load_task, start_run
 
     folder = tmp_path_factory.mktemp("workspace")
     task = folder / "task.yaml"
     task.write_text(TASK.replace("@spec@", PHI1).replace("@model@", str(learned_model_file)))
     with start_run(load_task(task), folder / "run") as prepared:
-        optimise(prepared)
+        finish_run(prepared)
     from stl_lfd.hsmm import load_model, save_model
 
     slow_skill = load_model(learned_model_file)

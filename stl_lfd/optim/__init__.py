@@ -1,17 +1,16 @@
 """Optimisation of skill parameters for STL specifications (the paper's Algorithm 1).
 
-- `task`: task files (YAML), the optimiser's settings and their validation;
-- `space`: which parameters move, their bounds, and how a point becomes a model;
-- `acquisition`: Sobol and random points, GP fitting and acquisition maximisation (BoTorch);
-- `composite`: method `stl`, one GP output per part of the spec;
-- `planned`: method `plan`, the same with each part's plan (its reference scored as the
-  kinematic backend executes it) as the prior;
-- `features`: what method `stl`'s GP sees of a point (the state path it selects, the means on
-  it and when each of its states starts);
-- `loop`: the trial loop;
-- `rundir`, `resume`: run directories, and what a resume checks;
-- `run`: a run from a task file, from preparation to summary;
-- `api`: `optimize` from Python objects, in memory.
+    task.py, settings.py, overrides.py   what to optimise and how: task files, `Parameters`,
+                                         `Optimizer`, command-line `Overrides`
+    space.py, features.py                the parameters that move, their bounds; what a GP sees
+    objective.py                         a point -> adapted skill -> rollout -> robustness of parts
+    trials.py                            `Trial`, `Outcome`, and the observations methods learn from
+    loop.py                              the thin loop: ask the method for a batch, execute, record
+    methods/                             one class per search method (plan, stl, pi, logei, random)
+                                         behind `SearchMethod.propose(request)`, found by name
+    runs/                                run directories, start and resume, recording, ask/tell,
+                                         parallel workers, sweeps
+    api.py                               `optimize` from Python objects, in memory
 
 Names are loaded on first use, so that importing `stl_lfd.optim.task` (for the method names,
 say) does not load the whole optimiser.
@@ -22,18 +21,22 @@ from __future__ import annotations
 from stl_lfd.lazy import lazy_exports
 
 _HOMES = {
-    "Trial": "stl_lfd.optim.loop",
-    "best_trial": "stl_lfd.optim.loop",
-    "optimise": "stl_lfd.optim.run",
-    "resume_run": "stl_lfd.optim.run",
-    "start_run": "stl_lfd.optim.run",
-    "RunDirectory": "stl_lfd.optim.rundir",
-    "trial_skill": "stl_lfd.optim.rundir",
+    "Trial": "stl_lfd.optim.trials",
+    "Outcome": "stl_lfd.optim.trials",
+    "best_trial": "stl_lfd.optim.trials",
+    "finish_run": "stl_lfd.optim.runs.recorder",
+    "resume_run": "stl_lfd.optim.runs.prepare",
+    "start_run": "stl_lfd.optim.runs.prepare",
+    "RunDirectory": "stl_lfd.optim.runs.directory",
+    "trial_skill": "stl_lfd.optim.runs.directory",
     "ParameterSpace": "stl_lfd.optim.space",
     "SearchSpace": "stl_lfd.optim.space",
     "build_search_space": "stl_lfd.optim.space",
     "build_space": "stl_lfd.optim.space",
-    "SINGLE_SKILL": "stl_lfd.optim.task",
+    "SINGLE_SKILL": "stl_lfd.optim.settings",
+    "Optimizer": "stl_lfd.optim.settings",
+    "Parameters": "stl_lfd.optim.settings",
+    "Overrides": "stl_lfd.optim.overrides",
     "Task": "stl_lfd.optim.task",
     "load_task": "stl_lfd.optim.task",
     "optimize": "stl_lfd.optim.api",

@@ -21,11 +21,14 @@ from typing import Callable, Mapping, Sequence
 from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM
 from stl_lfd.limits import samples_problem
-from stl_lfd.optim.loop import Trial, best_trial
-from stl_lfd.optim.run import PreparedRun, optimise, prepare_objective, start_run
-from stl_lfd.optim.rundir import MODEL_FILE, TASK_FILE, RunDirectory
+from stl_lfd.optim.runs.directory import MODEL_FILE, TASK_FILE
+from stl_lfd.optim.runs.prepare import PreparedRun, prepare_objective, start_run
+from stl_lfd.optim.runs.recorder import finish_run
+from stl_lfd.optim.runs.store import MemoryRun, RecordedRun
+from stl_lfd.optim.settings import SINGLE_SKILL, Optimizer, Parameters
 from stl_lfd.optim.summary import Summary
-from stl_lfd.optim.task import SINGLE_SKILL, Optimizer, Parameters, Task
+from stl_lfd.optim.task import Task
+from stl_lfd.optim.trials import Trial, best_trial
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim import Command
@@ -75,55 +78,6 @@ class Result:
     @property
     def satisfied(self) -> bool:
         return self.summary.satisfied
-
-
-class MemoryRun:
-    """The recording side of a run, kept in memory (what `RunDirectory` writes to disk)."""
-
-    def __init__(self, initial_signals: SignalTable) -> None:
-        self.signals: dict[int, SignalTable] = {0: initial_signals}
-        self.trials: list[Trial] = []
-        self.best_models: dict[str, HSMM] | None = None
-
-    def append_trial(self, trial: Trial, signals: SignalTable | None) -> None:
-        self.trials.append(trial)
-        if signals is not None:
-            self.signals[trial.trial] = signals
-
-    def write_best_models(self, models: dict[str, HSMM]) -> None:
-        self.best_models = models
-
-    def has_best_models(self) -> bool:
-        return self.best_models is not None
-
-    def write_summary(self, summary: Summary) -> None:
-        """Nothing to keep: `optimise` returns the final summary."""
-
-    def close(self) -> None:
-        pass
-
-
-class RecordedRun(MemoryRun):
-    """A run kept in memory and recorded in its `RunDirectory` as well."""
-
-    def __init__(self, initial_signals: SignalTable, disk: RunDirectory) -> None:
-        super().__init__(initial_signals)
-        self.disk = disk
-        self.path = disk.path
-
-    def append_trial(self, trial: Trial, signals: SignalTable | None) -> None:
-        super().append_trial(trial, signals)
-        self.disk.append_trial(trial, signals)
-
-    def write_best_models(self, models: dict[str, HSMM]) -> None:
-        super().write_best_models(models)
-        self.disk.write_best_models(models)
-
-    def write_summary(self, summary: Summary) -> None:
-        self.disk.write_summary(summary)
-
-    def close(self) -> None:
-        self.disk.close()
 
 
 def optimize(
@@ -181,7 +135,7 @@ def optimize(
     else:
         prepared = _start_recorded_run(task, models, spec, Path(out))
     with prepared:
-        summary = optimise(prepared, on_trial)
+        summary = finish_run(prepared, on_trial)
     record = prepared.run
     return Result(record.best_models or models, record.trials, summary, record.signals)
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from stl_lfd.errors import ConfigError, ModelError
 from stl_lfd.hsmm import HSMM
-from stl_lfd.optim.task import SINGLE_SKILL, Parameters
+from stl_lfd.optim.settings import SINGLE_SKILL, Parameters
 
 
 @dataclass(frozen=True)

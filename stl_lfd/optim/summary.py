@@ -6,9 +6,9 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
-from stl_lfd.optim.loop import Trial, best_trial
 from stl_lfd.optim.space import SearchSpace
 from stl_lfd.optim.task import Task
+from stl_lfd.optim.trials import Trial, best_trial
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.files import atomic_output, check_output_folder
-from stl_lfd.optim.rundir import RunDirectory
+from stl_lfd.optim.runs.directory import RunDirectory
 
 
 def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (), gp_parameters: list[str] | None = None) -> tuple[Path, list[Path]]:

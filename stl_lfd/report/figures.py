@@ -146,7 +146,7 @@ def gp_slices(run: RunData, parameters: list[str] | None = None) -> Figure | Non
         return None
     import torch
 
-    from stl_lfd.optim.acquisition import fit_gp
+    from stl_lfd.optim.methods.gp import fit_gp
 
     bounds = run.space.bounds
     model = fit_gp(X, Y, bounds)

@@ -109,7 +109,7 @@ def resolve_skill(request: ReplayRequest) -> Skill:
     """The model and settings named by a replay request."""
     source = request.source
     if source.is_dir():
-        from stl_lfd.optim.rundir import trial_skill
+        from stl_lfd.optim.runs.directory import trial_skill
 
         run = trial_skill(source, request.trial)
         return Skill(

@@ -9,8 +9,8 @@ import numpy as np
 
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim import RunDirectory, SearchSpace, Task, Trial, build_search_space
-from stl_lfd.optim.loop import observations
 from stl_lfd.optim.summary import Summary
+from stl_lfd.optim.trials import observations
 from stl_lfd.signals import SignalTable, read_signal_csv
 from stl_lfd.stl import ast, load_spec
 from stl_lfd.stl.regions import region_boxes

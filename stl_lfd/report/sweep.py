@@ -11,7 +11,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from stl_lfd.files import atomic_output
-from stl_lfd.optim.sweep import RUNS_DIR, Group, aggregate, read_table
+from stl_lfd.optim.runs.sweep import RUNS_DIR, Group, aggregate, read_table
 
 FIGURE_FILE = "sweep.png"
 

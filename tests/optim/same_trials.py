@@ -16,6 +16,8 @@ import tempfile
 import warnings
 from pathlib import Path
 
+import numpy as np
+
 from tests.conftest import ROOT
 
 RECORD = Path(__file__).parent / "data" / "same_trials.json"
@@ -41,7 +43,7 @@ def run_case(task_file: str, overrides: dict) -> list[dict]:
     import contextlib
 
     from benchmarks.bench_suite import executed_as
-    from stl_lfd.optim import load_task, optimise, start_run
+    from stl_lfd.optim import finish_run, load_task, start_run
 
     overrides = dict(overrides)
     lag = overrides.pop("lag", False)
@@ -49,9 +51,24 @@ def run_case(task_file: str, overrides: dict) -> list[dict]:
     warnings.simplefilter("ignore")
     with tempfile.TemporaryDirectory() as folder, executed_as("x+lag") if lag else contextlib.nullcontext():
         with start_run(task, Path(folder) / "run") as prepared:
-            optimise(prepared)
+            finish_run(prepared)
         lines = (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()
     return [{"phase": trial["phase"], "x": trial["x"], "robustness": trial["robustness"]} for trial in map(json.loads, lines)]
+
+
+def differences(recorded: list[dict], trials: list[dict], model_free_only: bool = False) -> list[str]:
+    """How `trials` differ from the `recorded` ones: phases, points (to 1e-9) and robustness."""
+    if [trial["phase"] for trial in trials] != [trial["phase"] for trial in recorded]:
+        return [f"phases {[trial['phase'] for trial in trials]} instead of {[trial['phase'] for trial in recorded]}"]
+    found = []
+    for number, (ours, theirs) in enumerate(zip(trials, recorded), start=1):
+        if model_free_only and theirs["phase"] not in MODEL_FREE_PHASES:
+            continue
+        if not np.allclose(ours["x"], theirs["x"], rtol=0, atol=1e-9) or (ours["robustness"] is None) != (theirs["robustness"] is None):
+            found.append(f"trial {number}: x {ours['x']} instead of {theirs['x']}")
+        elif ours["robustness"] is not None and abs(ours["robustness"] - theirs["robustness"]) > 1e-9:
+            found.append(f"trial {number}: robustness {ours['robustness']} instead of {theirs['robustness']}")
+    return found
 
 
 def main() -> None:
@@ -65,8 +82,9 @@ def main() -> None:
     record["processor"] = processor()
     for name, task_file, overrides in CASES:
         if arguments.only is None or name in arguments.only:
-            record["cases"][name] = run_case(task_file, overrides)
-            print(name, [trial["phase"] for trial in record["cases"][name]])
+            trials = run_case(task_file, overrides)
+            print(name, differences(record["cases"].get(name, []), trials) or "same trials")
+            record["cases"][name] = trials
     if arguments.write:
         RECORD.write_text(json.dumps(record, indent=1) + "\n")
 

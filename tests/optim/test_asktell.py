@@ -12,10 +12,11 @@ from typer.testing import CliRunner
 
 from stl_lfd.cli import app
 from stl_lfd.errors import RunError, SignalError
-from stl_lfd.optim import load_task, optimise, start_run
-from stl_lfd.optim.asktell import ask, ask_new, tell
-from stl_lfd.optim.resume import inputs_record
-from stl_lfd.optim.rundir import RunDirectory
+from stl_lfd.optim import finish_run, load_task, start_run
+from stl_lfd.optim.overrides import Overrides
+from stl_lfd.optim.runs.asktell import ask, ask_new, tell
+from stl_lfd.optim.runs.directory import RunDirectory
+from stl_lfd.optim.runs.resume import inputs_record
 from stl_lfd.signals import write_signal_csv
 from stl_lfd.sim import Command, execute, load_scene, read_reference_csv
 
@@ -44,7 +45,7 @@ def execute_kinematically(reference_path, scene="free_space", rate=50.0, name="s
 
 def start(tmp_path, model_file, **options):
     task = load_task(task_file(tmp_path, model_file, **options))
-    return task, ask_new(task, tmp_path / "asked", inputs_record(task, {}, task))
+    return task, ask_new(task, tmp_path / "asked", inputs_record(task, Overrides(), task))
 
 
 def loop(run, scene="free_space"):
@@ -65,7 +66,7 @@ def test_an_ask_tell_loop_gives_the_trials_of_optimize(tmp_path, learned_model_f
     assert first.trial == 0 and first.reference == tmp_path / "asked" / "executions" / "initial" / "reference.csv"
     tell(tmp_path / "asked", execute_kinematically(first.reference))
     loop(tmp_path / "asked")
-    optimise(start_run(task, tmp_path / "optimized"))
+    finish_run(start_run(task, tmp_path / "optimized"))
     assert recorded(tmp_path / "asked") == recorded(tmp_path / "optimized")
     asked, optimized = (json.loads((tmp_path / name / "summary.json").read_text()) for name in ("asked", "optimized"))
     for key in ("initial_robustness", "best_robustness", "best_trial", "trials", "complete"):
@@ -76,13 +77,13 @@ def test_an_ask_tell_loop_gives_the_trials_of_optimize(tmp_path, learned_model_f
 def test_the_initial_points_are_handed_out_without_loading_torch(tmp_path, learned_model_file):
     task, first = start(tmp_path, learned_model_file)
     run = RunDirectory(tmp_path / "asked")
-    from stl_lfd.optim.acquisition import sobol_points
+    from stl_lfd.optim.methods.base import sobol_points
     from stl_lfd.optim.space import build_search_space
 
     bounds = build_search_space(run.models(), task.parameters).bounds
     assert (run.initial_design() == sobol_points(bounds, 2, 4)).all()
     tell(tmp_path / "asked", execute_kinematically(first.reference))
-    script = "import sys; from stl_lfd.optim.asktell import ask; asked = ask(sys.argv[1]); print(asked.trial, asked.phase, 'torch' in sys.modules)"
+    script = "import sys; from stl_lfd.optim.runs.asktell import ask; asked = ask(sys.argv[1]); print(asked.trial, asked.phase, 'torch' in sys.modules)"
     printed = subprocess.run([sys.executable, "-c", script, str(tmp_path / "asked")], capture_output=True, text=True, cwd=ROOT)
     assert printed.stdout.split() == ["1", "sobol", "False"], printed.stderr
     assert json.loads((tmp_path / "asked" / "pending.json").read_text())["x"] == list(run.initial_design()[0])
@@ -101,7 +102,7 @@ def test_unsafe_trials_are_refused_as_optimize_refuses_them(tmp_path, learned_mo
     assert not any((tmp_path / "asked" / "executions" / f"trial-{trial.trial:04d}").exists() for trial in refused)
     fake = ROOT / "tests" / "executors" / "fake.py"
     command = task.with_overrides(backend="command", command=Command.parse(f"{sys.executable} {fake} {{reference}} {{signals}}"))
-    optimise(start_run(command, tmp_path / "optimized"))
+    finish_run(start_run(command, tmp_path / "optimized"))
     assert recorded(tmp_path / "asked") == recorded(tmp_path / "optimized")
 
 

@@ -4,9 +4,14 @@ import numpy as np
 import pytest
 import torch
 
-from stl_lfd.optim.composite import TrustRegion, compose, propose_composite, trust_region_length
-from stl_lfd.optim.loop import Outcome, Trial, best_trial, part_observations, run_trials
-from stl_lfd.optim.task import Optimizer
+from stl_lfd.optim.loop import run_remaining_trials, search_method
+from stl_lfd.optim.methods.base import Problem
+from stl_lfd.optim.methods.composition import compose
+from stl_lfd.optim.methods.stl import CompositeSearch, PartsData
+from stl_lfd.optim.methods.trust_region import TrustRegion, trust_region_length
+from stl_lfd.optim.objective import spec_composition
+from stl_lfd.optim.settings import Optimizer
+from stl_lfd.optim.trials import Outcome, Trial, best_trial, part_observations
 from stl_lfd.stl import Semantics, parse, split_spec
 
 BOUNDS = np.array([[0.0, 0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 1.0]])
@@ -19,8 +24,16 @@ def conjunction_objective(x):
     return Outcome(PARTS.compose(values), components=dict(zip(PARTS.names, values.tolist())))
 
 
-def run(optimizer, history=()):
-    return run_trials(conjunction_objective, BOUNDS, optimizer, list(history), lambda trial, payload: None, PARTS)
+def run(optimizer, history=(), objective=conjunction_objective, parts=PARTS):
+    method = search_method(optimizer, Problem(BOUNDS, spec_composition(parts)))
+    return run_remaining_trials(objective, method, list(history), lambda trial, payload: None)
+
+
+def propose_composite(X, parts, Y, bounds, semantics, initial, seed, routes=None):
+    """Method stl's next point from `n x m` parts (and `(n x r routes, their parts)`) at `X`."""
+    route_values, route_parts = routes if routes is not None else (np.empty((len(X), 0)), ())
+    method = CompositeSearch(Problem(bounds), Optimizer("stl", initial=initial, trials=100))
+    return method.composite_points(X, PartsData(parts, route_values, semantics, 1, route_parts), Y, 1, np.empty((0, X.shape[1])), seed)[0]
 
 
 @pytest.mark.parametrize("semantics", [Semantics("classic"), Semantics("new", 1.0), Semantics("new", 7.0)])
@@ -90,7 +103,7 @@ def test_a_spec_that_is_not_a_conjunction_runs_through_the_same_path():
         value = 0.1 - float(np.linalg.norm(x - 0.7))
         return Outcome(value, components={single.names[0]: value})
 
-    history = run_trials(objective, BOUNDS, Optimizer("stl", initial=4, trials=12, seed=0), [], lambda trial, payload: None, single)
+    history = run(Optimizer("stl", initial=4, trials=12, seed=0), objective=objective, parts=single)
     assert [trial.phase for trial in history][:5] == ["sobol"] * 4 + ["stl"]
     assert set(trial.phase for trial in history[5:]) <= {"stl", "explore"}
     assert best_trial(history).robustness > max(trial.robustness for trial in history[:4])
@@ -124,10 +137,10 @@ def test_a_route_leads_the_search_where_the_misleading_part_would_not():
 
 
 def test_a_part_sample_is_raised_to_its_routes():
-    from stl_lfd.optim.composite import _through_routes
+    from stl_lfd.optim.methods.composition import through_routes
 
     samples = torch.tensor([[0.1, -0.2, 0.3, -0.5], [0.1, -0.2, -0.4, -0.1]], dtype=torch.float64)  # 2 parts, 2 routes of part 1
-    np.testing.assert_array_equal(_through_routes(samples, 2, (1, 1)).numpy(), [[0.1, 0.3], [0.1, -0.1]])
+    np.testing.assert_array_equal(through_routes(samples, 2, (1, 1)).numpy(), [[0.1, 0.3], [0.1, -0.1]])
 
 
 def _two_bumps(narrow_center: np.ndarray):
@@ -145,24 +158,25 @@ def _two_bumps(narrow_center: np.ndarray):
 
 
 def test_starts_near_an_anchor_find_a_narrow_maximum_that_random_starts_miss():
-    from stl_lfd.optim.acquisition import maximise_acquisition
-    from stl_lfd.optim.composite import RAW_SAMPLES, RESTARTS, anchored_starts
+    from stl_lfd.optim.methods.gp import maximise_acquisition
+    from stl_lfd.optim.methods.stl import CompositeSettings, anchored_starts
 
+    settings = CompositeSettings()
     dimensions = 12
     box = np.vstack([np.zeros(dimensions), np.ones(dimensions)])
     narrow = np.full(dimensions, 0.2)
     acquisition = _two_bumps(narrow)
     anchor = narrow + np.random.default_rng(0).normal(0, 0.05, dimensions)  # a trial near it
     for seed in range(3):
-        blind = maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed)
+        blind = maximise_acquisition(acquisition, box, settings.restarts, settings.raw_samples, seed)
         starts = anchored_starts(acquisition, anchor[None], box, seed)
-        anchored = maximise_acquisition(acquisition, box, RESTARTS, RAW_SAMPLES, seed, starts=starts)
+        anchored = maximise_acquisition(acquisition, box, settings.restarts, settings.raw_samples, seed, starts=starts)
         assert np.linalg.norm(blind - 0.8) < 0.1, seed  # the broad bump: no random start came near the narrow one
         assert np.linalg.norm(anchored - narrow) < 0.01, seed
 
 
 def test_the_best_trial_of_each_output_is_an_anchor_once():
-    from stl_lfd.optim.composite import best_trials
+    from stl_lfd.optim.methods.stl import best_trials
 
     unit = np.arange(8.0).reshape(4, 2)
     values = np.array([[0.1, -3.0, 5.0], [0.4, -1.0, 2.0], [0.2, -2.0, 9.0], [0.3, -4.0, 1.0]])  # bests at 1, 1, 2

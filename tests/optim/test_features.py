@@ -9,9 +9,10 @@ import pytest
 import torch
 
 from stl_lfd.optim import SearchSpace, build_space
-from stl_lfd.optim.composite import PartsPosterior, fit_multi_output_gp
 from stl_lfd.optim.features import SKIPPED, path_features
-from stl_lfd.optim.task import DurationParameters, MeanParameters, Parameters
+from stl_lfd.optim.methods.gp import fit_multi_output_gp
+from stl_lfd.optim.methods.posterior import PartsPosterior
+from stl_lfd.optim.settings import DurationParameters, MeanParameters, Parameters
 
 BAND = Parameters(MeanParameters((2, 3), ("x", "y", "z")), DurationParameters("all", 1.0), "band")
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import torch
 
-from stl_lfd.optim.composite import fit_multi_output_gp
-from stl_lfd.optim.likelihood import Hyperparameters, LogNormal, negative_log_likelihood, squared_differences
+from stl_lfd.optim.methods.gp import fit_multi_output_gp
+from stl_lfd.optim.methods.likelihood import Hyperparameters, LogNormal, negative_log_likelihood, squared_differences
 
 
 def _model_and_data(outputs, seed=0, count=15, dimensions=4):
@@ -79,7 +79,7 @@ def test_a_matrix_that_is_not_positive_definite_is_an_infinite_loss_not_an_error
 
 
 def test_pis_gp_is_fitted_the_same_way_on_inputs_normalised_to_the_bounds():
-    from stl_lfd.optim.acquisition import fit_gp
+    from stl_lfd.optim.methods.gp import fit_gp
 
     rng = np.random.default_rng(5)
     bounds = np.array([[-2.0, 0.0, 10.0], [2.0, 0.5, 30.0]])

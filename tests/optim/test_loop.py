@@ -3,9 +3,11 @@
 import numpy as np
 import pytest
 
-from stl_lfd.optim.acquisition import sobol_points
-from stl_lfd.optim.loop import Outcome, Trial, best_trial, run_trials, stalled
-from stl_lfd.optim.task import Optimizer
+from stl_lfd.optim.loop import run_remaining_trials, search_method
+from stl_lfd.optim.methods.base import Problem, sobol_points
+from stl_lfd.optim.methods.stl import CompositeSearch
+from stl_lfd.optim.settings import Optimizer
+from stl_lfd.optim.trials import Outcome, Trial, best_trial
 
 BOUNDS = np.array([[0.0, -1.0, 2.0], [1.0, 1.0, 4.0]])
 TARGET = np.array([0.7, 0.2, 3.1])
@@ -16,7 +18,7 @@ def objective(x):
 
 
 def run(optimizer, history=(), function=objective):
-    return run_trials(function, BOUNDS, optimizer, list(history), lambda trial, payload: None)
+    return run_remaining_trials(function, search_method(optimizer, Problem(BOUNDS)), list(history), lambda trial, payload: None)
 
 
 def points(history):
@@ -87,7 +89,7 @@ def hopeless(x):  # violated everywhere, with gains far below the distance to sa
 def stalls(*trials: tuple[str, float]) -> bool:
     """`stalled` on a history of (phase, robustness) trials."""
     history = [Trial(number, phase, np.zeros(3), value) for number, (phase, value) in enumerate(trials, start=1)]
-    return stalled(history, np.array([value for _, value in trials]))
+    return CompositeSearch(Problem(BOUNDS), Optimizer("stl")).stalled(history, np.array([value for _, value in trials]))
 
 
 def test_stl_explores_with_the_sobol_sequence_while_it_stalls_on_a_violated_spec():

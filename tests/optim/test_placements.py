@@ -8,7 +8,7 @@ import pytest
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import learn_from_folder, save_model
-from stl_lfd.optim import load_task, optimise, start_run
+from stl_lfd.optim import finish_run, load_task, start_run
 from tests.conftest import ROOT
 
 BEHAVIOUR = ROOT / "configs" / "behaviours" / "pick_insert.yaml"
@@ -20,7 +20,7 @@ PLACEMENTS = """placements:
 
 @pytest.fixture(scope="module")
 def behaviour_models():
-    from stl_lfd.optim.run import task_models
+    from stl_lfd.optim.objective import task_models
 
     return task_models(load_task(placed_task(Path(__import__("tempfile").mkdtemp()))))
 
@@ -42,7 +42,7 @@ def test_a_model_with_the_base_frame_alone_gives_the_same_trials_as_the_plain_mo
     save_model(learn_from_folder(folder, 6, frames=["base"])[0], tmp_path / "framed.npz")
     runs = []
     for model, frame in (("plain", ""), ("framed", ", frame: base")):
-        optimise(start_run(load_task(phi1_task(tmp_path, tmp_path / f"{model}.npz", frame)), tmp_path / model))
+        finish_run(start_run(load_task(phi1_task(tmp_path, tmp_path / f"{model}.npz", frame)), tmp_path / model))
         runs.append([json.loads(line) for line in (tmp_path / model / "trials.jsonl").read_text().splitlines()])
     plain, framed = runs
     assert [trial["robustness"] for trial in plain] == [trial["robustness"] for trial in framed]
@@ -69,7 +69,7 @@ def test_several_placements_score_the_worst_and_record_each(tmp_path):
     assert len(objective.scenes) == 2 and objective.scenes[1].frame_poses["shaft"].position == (0.48, -0.28, 0.08)
     references = [objective.reference(prepared.models, scene) for scene in objective.scenes]
     assert np.abs(references[0].positions[-1] - references[1].positions[-1]).max() > 0.05  # the skill follows the holder
-    optimise(prepared)
+    finish_run(prepared)
     trials = [json.loads(line) for line in (tmp_path / "run" / "trials.jsonl").read_text().splitlines()]
     parts = objective.parts
     for trial in trials:
@@ -102,7 +102,7 @@ def test_several_placements_score_the_worst_and_record_each(tmp_path):
 )
 @pytest.mark.slow
 def test_bad_placements_and_frames_name_the_file_and_key(tmp_path, extra, means, message, behaviour_models):
-    from stl_lfd.optim.run import objective_for
+    from stl_lfd.optim.objective import objective_for
 
     path = placed_task(tmp_path, extra, means) if means else placed_task(tmp_path, extra)
     with pytest.raises(ConfigError) as error:
@@ -137,13 +137,14 @@ def test_optimize_from_python_takes_placements():
 
 
 def test_executions_outside_stlopt_take_one_placement(tmp_path):
-    from stl_lfd.optim.asktell import ask_new
-    from stl_lfd.optim.resume import inputs_record
-    from stl_lfd.optim.run import objective_for
+    from stl_lfd.optim.objective import objective_for
+    from stl_lfd.optim.overrides import Overrides
+    from stl_lfd.optim.runs.asktell import ask_new
+    from stl_lfd.optim.runs.resume import inputs_record
 
     task = load_task(placed_task(tmp_path))
     with pytest.raises(ConfigError, match="takes one placement"):
-        ask_new(task, tmp_path / "run", inputs_record(task, {}, task))
+        ask_new(task, tmp_path / "run", inputs_record(task, Overrides(), task))
     command = task.with_overrides(backend="command", command=__import__("stl_lfd").Command.parse("true"))
     with pytest.raises(ConfigError, match="several placements need a simulated backend"):
         objective_for(command, {}, execute=False)
@@ -153,7 +154,7 @@ def test_executions_outside_stlopt_take_one_placement(tmp_path):
 def test_grouped_parts_compose_per_placement_then_take_the_worst():
     import torch
 
-    from stl_lfd.optim.composite import compose
+    from stl_lfd.optim.methods.composition import compose
     from stl_lfd.stl import Semantics, split_spec
     from stl_lfd.stl import load_spec as read
 

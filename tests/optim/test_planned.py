@@ -5,11 +5,15 @@ import json
 import numpy as np
 import pytest
 
-from stl_lfd.optim import load_task, optimise, resume_run, start_run
-from stl_lfd.optim.loop import Outcome, best_trial, run_trials
-from stl_lfd.optim.planned import PENDING_SPREAD, Plan, propose_planned, sobol_pool
-from stl_lfd.optim.task import Optimizer
-from stl_lfd.stl import Semantics, parse, split_spec
+from stl_lfd.optim import finish_run, load_task, resume_run, start_run
+from stl_lfd.optim.loop import run_remaining_trials, search_method
+from stl_lfd.optim.methods.base import Problem, Request
+from stl_lfd.optim.methods.plan import PlanSettings
+from stl_lfd.optim.methods.planning import Plan
+from stl_lfd.optim.objective import spec_composition
+from stl_lfd.optim.settings import Optimizer
+from stl_lfd.optim.trials import Outcome, best_trial
+from stl_lfd.stl import parse, split_spec
 from tests.optim.test_run import small_task
 
 BOUNDS = np.array([[0.0] * 4, [1.0] * 4])
@@ -35,9 +39,12 @@ def objective(parts):
     return evaluate
 
 
+def method(optimizer):
+    return search_method(optimizer, Problem(BOUNDS, spec_composition(PARTS), plan=planned_parts))
+
+
 def run(parts, optimizer, history=()):
-    plan = Plan(planned_parts, BOUNDS)
-    return run_trials(objective(parts), BOUNDS, optimizer, list(history), lambda trial, payload: None, PARTS, plan=plan)
+    return run_remaining_trials(objective(parts), method(optimizer), list(history), lambda trial, payload: None)
 
 
 def test_a_plan_is_memoised_and_a_point_without_one_is_nan():
@@ -59,9 +66,9 @@ def test_a_plan_is_memoised_and_a_point_without_one_is_nan():
 
 
 def test_the_first_point_is_the_best_plan_the_search_finds():
-    plan = Plan(planned_parts, BOUNDS)
-    x = propose_planned(np.empty((0, 4)), np.empty((0, 2)), np.empty(0), BOUNDS, Semantics("new", 1.0), 2, plan, seed=0, trial_seed=0)
-    planned = [PARTS.compose(values) for values in plan.memo.values()]
+    plan_search = method(Optimizer("plan", initial=1, trials=2, seed=0))
+    [(x, phase)] = plan_search.propose(Request([], np.empty((0, 4)), 0, 1, 0))
+    planned = [PARTS.compose(values) for values in plan_search.plan.memo.values()]
     assert PARTS.compose(planned_parts(x)) == pytest.approx(max(planned))
     assert PARTS.compose(planned_parts(x)) > 0  # the box is found by the plan search alone
 
@@ -92,7 +99,8 @@ def test_method_plan_is_reproducible_and_resumes_exactly():
 def test_the_design_spreads_over_the_points_the_plan_satisfies():
     history = run(executed_parts, Optimizer("plan", initial=4, trials=4, seed=0))
     assert [trial.phase for trial in history] == ["design"] * 4
-    pool_values = np.array([PARTS.compose(planned_parts(point)) for point in sobol_pool(4, 0)])
+    pool = method(Optimizer("plan", initial=4, trials=4, seed=0)).pool(0)
+    pool_values = np.array([PARTS.compose(planned_parts(point)) for point in pool])
     satisfying = int(np.sum(pool_values > 0))
     planned = [PARTS.compose(planned_parts(trial.x)) for trial in history]
     assert planned[0] > 0  # the plan search's best
@@ -109,7 +117,7 @@ def test_parallel_trials_spread_out_and_resume_exactly_in_the_middle_of_a_batch(
     first = run(executed_parts, optimizer)
     assert [trial.phase for trial in first] == ["design"] * 2 + ["plan"] * 4
     for a, b in ((first[2], first[3]), (first[4], first[5])):  # the two points of a batch
-        assert np.max(np.abs(a.x - b.x)) >= PENDING_SPREAD
+        assert np.max(np.abs(a.x - b.x)) >= PlanSettings().pending_spread
     resumed = run(executed_parts, optimizer, first[:3])
     assert np.array_equal([t.x for t in resumed], [t.x for t in first])
 
@@ -118,16 +126,16 @@ def test_parallel_trials_spread_out_and_resume_exactly_in_the_middle_of_a_batch(
 def test_a_run_with_method_plan_scores_the_plan_on_the_kinematic_backend_and_resumes(tmp_path, learned_model_file):
     task = load_task(small_task(tmp_path, learned_model_file)).with_overrides(method="plan", initial=1, trials=4)
     whole = start_run(task, tmp_path / "whole")
-    plan = whole.plan()
+    plan = Plan(whole.problem().plan, whole.space.bounds)
     x = (whole.space.bounds[0] + whole.space.bounds[1]) / 2
-    planned = plan((x - whole.space.bounds[0])[None] / (whole.space.bounds[1] - whole.space.bounds[0]))[0]
+    planned = plan(np.full((1, whole.space.dimension), 0.5))[0]
     executed = whole.objective(x)
     np.testing.assert_allclose(planned, list(executed.components.values()))  # the kinematic backend executes the plan
-    optimise(whole)
+    finish_run(whole)
     trials = [json.loads(line) for line in (tmp_path / "whole" / "trials.jsonl").read_text().splitlines()]
     assert [trial["phase"] for trial in trials] == ["design"] + ["plan"] * 3
     assert trials[0]["robustness"] > whole.summary.initial_robustness
-    optimise(start_run(task.with_overrides(trials=2), tmp_path / "resumed"))
-    optimise(resume_run(tmp_path / "resumed", trials=4))
+    finish_run(start_run(task.with_overrides(trials=2), tmp_path / "resumed"))
+    finish_run(resume_run(tmp_path / "resumed", trials=4))
     resumed = [json.loads(line) for line in (tmp_path / "resumed" / "trials.jsonl").read_text().splitlines()]
     assert [trial["x"] for trial in resumed] == [trial["x"] for trial in trials]

@@ -9,7 +9,7 @@ from typer.testing import CliRunner
 
 from stl_lfd.cli import app
 from stl_lfd.errors import ConfigError, SpecError
-from stl_lfd.optim import RunDirectory, build_search_space, load_task, optimise, resume_run, start_run
+from stl_lfd.optim import RunDirectory, build_search_space, finish_run, load_task, resume_run, start_run
 from tests.conftest import ROOT
 
 runner = CliRunner()
@@ -29,7 +29,7 @@ def small_task(tmp_path: Path, model_file: Path, spec: str = "phi1", duration: f
 @pytest.mark.slow
 def test_a_run_writes_its_directory_as_it_goes(tmp_path, learned_model_file):
     task = load_task(small_task(tmp_path, learned_model_file))
-    summary = optimise(start_run(task, tmp_path / "run"))
+    summary = finish_run(start_run(task, tmp_path / "run"))
     run = tmp_path / "run"
     assert {path.name for path in run.iterdir()} == {
         "task.yaml",
@@ -62,14 +62,14 @@ def test_a_run_writes_its_directory_as_it_goes(tmp_path, learned_model_file):
 @pytest.mark.slow
 def test_a_killed_run_resumes_without_repeating_or_losing_trials(tmp_path, learned_model_file):
     task = load_task(small_task(tmp_path, learned_model_file))
-    optimise(start_run(task, tmp_path / "whole"))
+    finish_run(start_run(task, tmp_path / "whole"))
     interrupted = tmp_path / "interrupted"
-    optimise(start_run(task.with_overrides(trials=4), interrupted))
+    finish_run(start_run(task.with_overrides(trials=4), interrupted))
     # a kill while the fourth line was being written leaves a partial line behind
     trials_file = interrupted / "trials.jsonl"
     lines = trials_file.read_text().splitlines()
     trials_file.write_text("\n".join(lines[:3]) + "\n" + lines[3][:40])
-    summary = optimise(resume_run(interrupted, trials=5))
+    summary = finish_run(resume_run(interrupted, trials=5))
     assert summary.trials == 5
     resumed = [json.loads(line) for line in trials_file.read_text().splitlines()]
     whole = [json.loads(line) for line in (tmp_path / "whole" / "trials.jsonl").read_text().splitlines()]
@@ -116,7 +116,7 @@ def test_cli_optimize_prints_the_summary_and_protects_existing_runs(tmp_path, le
 @pytest.mark.slow
 def test_replay_of_a_run_uses_its_spec_and_best_trial(tmp_path, learned_model_file):
     out = tmp_path / "run"
-    optimise(start_run(load_task(small_task(tmp_path, learned_model_file)), out))
+    finish_run(start_run(load_task(small_task(tmp_path, learned_model_file)), out))
     summary = json.loads((out / "summary.json").read_text())
     video = tmp_path / "best.gif"
     result = runner.invoke(app, ["replay", str(out), "--video", str(video), "--duration", "0.5"])
@@ -129,7 +129,7 @@ def test_replay_of_a_run_uses_its_spec_and_best_trial(tmp_path, learned_model_fi
 
 @pytest.mark.slow
 def test_ctrl_c_keeps_the_finished_trials_and_says_how_to_resume(tmp_path, learned_model_file, monkeypatch):
-    from stl_lfd.optim import run as run_module
+    from stl_lfd.optim import objective as run_module
 
     task = small_task(tmp_path, learned_model_file)
     out = tmp_path / "interrupted"
@@ -159,7 +159,7 @@ def test_recorded_parts_compose_to_the_recorded_robustness_exactly(tmp_path, lea
     from stl_lfd.stl import load_spec, split_spec
 
     task = load_task(small_task(tmp_path, learned_model_file, extra=f"semantics: {semantics}\n")).with_overrides(method="stl")
-    summary = optimise(start_run(task, tmp_path / "run"))
+    summary = finish_run(start_run(task, tmp_path / "run"))
     parts = split_spec(load_spec(ROOT / "specs" / "phi1.stl"), semantics)
     trials = [json.loads(line) for line in (tmp_path / "run" / "trials.jsonl").read_text().splitlines()]
     assert [trial["phase"] for trial in trials] == ["sobol"] * 3 + ["stl"] * 2
@@ -177,7 +177,7 @@ def test_routes_are_recorded_with_each_trial_and_a_resumed_run_proposes_the_same
     spec = tmp_path / "implication.stl"
     spec.write_text("F[0, 20] x > 0.45 & G (y > 0.1 -> z < 0.35)\n")
     task = load_task(small_task(tmp_path, learned_model_file)).with_overrides(spec=spec, method="stl")
-    optimise(start_run(task, tmp_path / "whole"))
+    finish_run(start_run(task, tmp_path / "whole"))
     trials = [json.loads(line) for line in (tmp_path / "whole" / "trials.jsonl").read_text().splitlines()]
     routes = {name: Spec.parse(name) for name in ("G !y > 0.1", "G z < 0.35")}
     for trial in trials:
@@ -185,15 +185,15 @@ def test_routes_are_recorded_with_each_trial_and_a_resumed_run_proposes_the_same
         expected = {name: route.robustness(table.columns, table.times) for name, route in routes.items()}
         assert trial["routes"] == pytest.approx(expected, abs=1e-9)  # the CSV holds rounded signals
     assert [trial.routes for trial in RunDirectory(tmp_path / "whole").trials()] == [trial["routes"] for trial in trials]
-    optimise(start_run(task.with_overrides(trials=4), tmp_path / "resumed"))
-    optimise(resume_run(tmp_path / "resumed", trials=5))
+    finish_run(start_run(task.with_overrides(trials=4), tmp_path / "resumed"))
+    finish_run(resume_run(tmp_path / "resumed", trials=5))
     resumed = [json.loads(line) for line in (tmp_path / "resumed" / "trials.jsonl").read_text().splitlines()]
     assert [trial["x"] for trial in resumed] == [trial["x"] for trial in trials]
 
 
 @pytest.mark.slow
 def test_a_spec_without_routes_records_none(tmp_path, learned_model_file):
-    optimise(start_run(load_task(small_task(tmp_path, learned_model_file)), tmp_path / "run"))
+    finish_run(start_run(load_task(small_task(tmp_path, learned_model_file)), tmp_path / "run"))
     assert all("routes" not in json.loads(line) for line in (tmp_path / "run" / "trials.jsonl").read_text().splitlines())
 
 
@@ -207,11 +207,12 @@ def test_a_run_on_transitions_models_paths_and_resumes_exactly(tmp_path, learned
     )
     task = load_task(path).with_overrides(method="stl")
     whole = start_run(task, tmp_path / "whole")
-    assert whole.features() is not None and whole.features().dimension == 6 + 6 + 6  # means, five starts and the end, states
-    optimise(whole)
+    features = whole.problem().features
+    assert features is not None and features.dimension == 6 + 6 + 6  # means, five starts and the end, states
+    finish_run(whole)
     trials = [json.loads(line) for line in (tmp_path / "whole" / "trials.jsonl").read_text().splitlines()]
     assert [trial["phase"] for trial in trials][3:] != ["sobol"] * 3
-    optimise(start_run(task.with_overrides(trials=4), tmp_path / "resumed"))
-    optimise(resume_run(tmp_path / "resumed", trials=6))
+    finish_run(start_run(task.with_overrides(trials=4), tmp_path / "resumed"))
+    finish_run(resume_run(tmp_path / "resumed", trials=6))
     resumed = [json.loads(line) for line in (tmp_path / "resumed" / "trials.jsonl").read_text().splitlines()]
     assert [trial["x"] for trial in resumed] == [trial["x"] for trial in trials]

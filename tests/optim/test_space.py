@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 
 from stl_lfd.optim import build_space
+from stl_lfd.optim.settings import DurationParameters, MeanParameters, Parameters
 from stl_lfd.optim.space import transition_entries
-from stl_lfd.optim.task import DurationParameters, MeanParameters, Parameters
 
 
 def test_bounds_follow_the_state_and_duration_spreads(learned_model):

@@ -12,7 +12,8 @@ from typer.testing import CliRunner
 
 from stl_lfd.cli import app
 from stl_lfd.errors import ConfigError, RunError
-from stl_lfd.optim.sweep import aggregate, load_sweep, local_results, merged, read_table, run_sweep
+from stl_lfd.optim.runs.sweep import aggregate, local_results, read_table, run_sweep
+from stl_lfd.optim.runs.sweep_file import load_sweep, merged
 
 ROOT = Path(__file__).resolve().parents[2]
 runner = CliRunner()
@@ -58,7 +59,7 @@ def test_a_sweep_runs_every_cell_as_a_run_directory_and_skips_finished_ones(tmp_
     calls = []
 
     def in_process(cells):
-        from stl_lfd.optim.sweep import run_cell
+        from stl_lfd.optim.runs.sweep import run_cell
 
         for cell in cells:
             calls.append(cell.name)
@@ -84,7 +85,7 @@ def test_a_killed_sweep_finishes_only_the_missing_cells(tmp_path, learned_model_
     plan = load_sweep(sweep_file(tmp_path, learned_model_file))
 
     def killed_after_two(cells):
-        from stl_lfd.optim.sweep import run_cell
+        from stl_lfd.optim.runs.sweep import run_cell
 
         for index, cell in enumerate(cells):
             if index == 2:
@@ -98,7 +99,7 @@ def test_a_killed_sweep_finishes_only_the_missing_cells(tmp_path, learned_model_
     ran = []
 
     def recording(cells):
-        from stl_lfd.optim.sweep import run_cell
+        from stl_lfd.optim.runs.sweep import run_cell
 
         for cell in cells:
             ran.append(cell.name)
@@ -137,7 +138,7 @@ def test_variants_change_task_keys_and_bad_sweeps_are_refused(tmp_path, learned_
 @pytest.mark.slow
 def test_a_sweep_folder_holding_another_run_is_refused(tmp_path, learned_model_file):
     plan = load_sweep(sweep_file(tmp_path, learned_model_file, "trials: 2\n"))
-    from stl_lfd.optim.sweep import run_cell
+    from stl_lfd.optim.runs.sweep import run_cell
 
     run_sweep(plan, tmp_path / "out", lambda cells: (run_cell(cell) for cell in cells))
     (tmp_path / "sweep.yaml").write_text((tmp_path / "sweep.yaml").read_text().replace("trials: 2", "trials: 3\ninitial: 1"))
@@ -164,7 +165,7 @@ def test_the_command_prints_the_table_and_writes_the_figure_with_local_workers(t
 def test_ray_gives_the_table_of_local_workers(tmp_path, learned_model_file):
     import ray
 
-    from stl_lfd.optim.sweep import ray_results
+    from stl_lfd.optim.runs.sweep import ray_results
 
     plan = load_sweep(sweep_file(tmp_path, learned_model_file, seeds=1))  # a cell for each of ray's two workers
     run_sweep(plan, tmp_path / "local", lambda cells: local_results(cells, 2))

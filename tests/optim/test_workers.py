@@ -7,10 +7,13 @@ import pytest
 import torch
 
 from stl_lfd.errors import ConfigError
-from stl_lfd.optim import load_task, optimise, resume_run, start_run
-from stl_lfd.optim.composite import PartsPosterior, fit_multi_output_gp
-from stl_lfd.optim.loop import batch_of, next_points, run_trials
-from stl_lfd.optim.task import Optimizer
+from stl_lfd.optim import finish_run, load_task, resume_run, start_run
+from stl_lfd.optim.loop import batch_of, next_points, run_remaining_trials, search_method
+from stl_lfd.optim.methods.base import Problem
+from stl_lfd.optim.methods.gp import fit_multi_output_gp
+from stl_lfd.optim.methods.posterior import PartsPosterior
+from stl_lfd.optim.objective import spec_composition
+from stl_lfd.optim.settings import Optimizer
 from tests.optim.test_composite import BOUNDS, PARTS, conjunction_objective
 from tests.optim.test_run import small_task
 
@@ -21,8 +24,12 @@ def in_order(points):
     return lambda: outcomes
 
 
-def run(optimizer, history=()):
-    return run_trials(conjunction_objective, BOUNDS, optimizer, list(history), lambda trial, payload: None, PARTS, in_order)
+def method(optimizer):
+    return search_method(optimizer, Problem(BOUNDS, spec_composition(PARTS)))
+
+
+def run(optimizer, history=(), submit=in_order):
+    return run_remaining_trials(conjunction_objective, method(optimizer), list(history), lambda trial, payload: None, submit)
 
 
 def test_batches_split_the_initial_trials_and_then_the_rest():
@@ -36,14 +43,14 @@ def test_batches_split_the_initial_trials_and_then_the_rest():
 @pytest.mark.slow
 def test_one_worker_proposes_from_the_whole_history_and_more_propose_a_batch_ahead():
     optimizer = Optimizer("stl", initial=4, trials=7, seed=2)
-    sequential = run_trials(conjunction_objective, BOUNDS, optimizer, [], lambda trial, payload: None, PARTS)
+    sequential = run(optimizer, submit=None)
     assert [trial.x.tolist() for trial in run(optimizer)] == [trial.x.tolist() for trial in sequential]
     history = sequential[:6]
     # with 2 workers, the batch of trials 7-8 is proposed while trials 5-6 run: from trials 1-4,
     # with 5 and 6 pending, whether 5-6 are recorded yet or not
     parallel = Optimizer("stl", initial=4, trials=8, seed=2, workers=2)
-    ahead = next_points(history[:4], BOUNDS, parallel, PARTS, [trial.x for trial in history[4:6]])
-    after = next_points(history, BOUNDS, parallel, PARTS)
+    ahead = next_points(history[:4], method(parallel), [trial.x for trial in history[4:6]])
+    after = next_points(history, method(parallel))
     assert [x.tolist() for x, _ in ahead] == [x.tolist() for x, _ in after] and len(after) == 2
 
 
@@ -55,7 +62,7 @@ def test_a_batch_is_reproducible_and_a_resume_inside_it_continues_exactly():
     assert [trial.x.tolist() for trial in run(optimizer)] == [trial.x.tolist() for trial in whole]
     resumed = run(optimizer, whole[:5])  # killed after the first trial of a batch of three
     assert [trial.x.tolist() for trial in resumed] == [trial.x.tolist() for trial in whole]
-    batch = next_points(whole[:4], BOUNDS, optimizer, PARTS)
+    batch = next_points(whole[:4], method(optimizer))
     assert len(batch) == 3 and len({tuple(np.round(x, 6)) for x, _ in batch}) == 3  # three distinct points
 
 
@@ -84,9 +91,9 @@ def test_methods_that_propose_one_point_refuse_parallel_trials():
 def test_a_run_with_two_workers_records_its_trials_in_order_and_resumes(tmp_path, learned_model_file):
     task = load_task(small_task(tmp_path, learned_model_file, extra="")).with_overrides(workers=2, trials=6, initial=3)
     single = load_task(small_task(tmp_path, learned_model_file)).with_overrides(trials=6, initial=3)
-    optimise(start_run(task.with_overrides(trials=4), tmp_path / "parallel"))
-    optimise(resume_run(tmp_path / "parallel", trials=6))
-    optimise(start_run(single, tmp_path / "single"))
+    finish_run(start_run(task.with_overrides(trials=4), tmp_path / "parallel"))
+    finish_run(resume_run(tmp_path / "parallel", trials=6))
+    finish_run(start_run(single, tmp_path / "single"))
     parallel, sequential = ([json.loads(line) for line in (tmp_path / name / "trials.jsonl").read_text().splitlines()] for name in ("parallel", "single"))
     assert [trial["trial"] for trial in parallel] == [1, 2, 3, 4, 5, 6]
     # the Sobol trials do not depend on the batches; every trial was executed and scored

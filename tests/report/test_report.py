@@ -6,7 +6,7 @@ from PIL import Image
 from typer.testing import CliRunner
 
 from stl_lfd.cli import app
-from stl_lfd.optim import load_task, optimise, start_run
+from stl_lfd.optim import finish_run, load_task, start_run
 from stl_lfd.signals import read_signal_csv, write_signal_csv
 from tests.conftest import ROOT
 
@@ -23,7 +23,7 @@ def run_dir(tmp_path_factory, learned_model_file):
         "parameters:\n  means: {components: [3]}\n  durations: {components: all}\n  transitions: band\n"
         "optimizer: {initial: 3, trials: 6, seed: 0}\n"
     )
-    optimise(start_run(load_task(task), folder / "run"))
+    finish_run(start_run(load_task(task), folder / "run"))
     return folder / "run"
 
 
@@ -83,7 +83,7 @@ def test_report_of_a_behaviour_run_draws_each_skill(tmp_path):
     from stl_lfd.optim import load_task
 
     task = load_task(ROOT / "configs" / "phi3_strict.yaml").with_overrides(backend="kinematic", trials=3, initial=2)
-    optimise(start_run(task, tmp_path / "run"))
+    finish_run(start_run(task, tmp_path / "run"))
     result = runner.invoke(app, ["report", str(tmp_path / "run"), "--out", str(tmp_path / "report")])
     assert result.exit_code == 0, result.stderr
     for name in FIGURES:

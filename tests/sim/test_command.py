@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from stl_lfd.errors import ConfigError, ExecutionError, SignalError
-from stl_lfd.optim import load_task, optimise, start_run
+from stl_lfd.optim import finish_run, load_task, start_run
 from stl_lfd.sim import (
     Command,
     CommandBackend,
@@ -101,8 +101,8 @@ def test_bundled_scenes_declare_safety_and_bad_limits_are_refused(tmp_path):
 @pytest.mark.slow
 def test_the_command_backend_gives_what_the_in_process_backend_gives(tmp_path, learned_model_file):
     command_task = executor_task(tmp_path, learned_model_file)
-    optimise(start_run(command_task, tmp_path / "command"))
-    optimise(start_run(command_task.with_overrides(backend="kinematic"), tmp_path / "kinematic"))
+    finish_run(start_run(command_task, tmp_path / "command"))
+    finish_run(start_run(command_task.with_overrides(backend="kinematic"), tmp_path / "kinematic"))
     command, kinematic = trials_of(tmp_path / "command"), trials_of(tmp_path / "kinematic")
     assert [(t["x"], t["robustness"], t["components"]) for t in command] == [(t["x"], t["robustness"], t["components"]) for t in kinematic]
     for folder in ("initial", "trial-0001", "trial-0004"):
@@ -112,7 +112,7 @@ def test_the_command_backend_gives_what_the_in_process_backend_gives(tmp_path, l
 @pytest.mark.slow
 def test_placeholders_and_environment_reach_the_command(tmp_path, learned_model_file, monkeypatch):
     monkeypatch.setenv("EXECUTOR_MODE", "env")
-    optimise(start_run(executor_task(tmp_path, learned_model_file, trials=1), tmp_path / "run"))
+    finish_run(start_run(executor_task(tmp_path, learned_model_file, trials=1), tmp_path / "run"))
     folder = tmp_path / "run" / "executions" / "trial-0001"
     told = dict(line.split("=", 1) for line in (folder / "stdout.txt").read_text().splitlines())
     assert told["STLOPT_TRIAL"] == "1" and told["STLOPT_RUN_DIR"] == str((tmp_path / "run").resolve())
@@ -151,13 +151,13 @@ def test_a_failed_execution_fails_its_trial_and_the_run_goes_on_and_resumes(tmp_
     monkeypatch.setenv("EXECUTOR_MODE", "noforce")
     monkeypatch.setenv("EXECUTOR_BAD_TRIAL", "1")
     task = executor_task(tmp_path, learned_model_file, spec=FORCE_SPEC, trials=2)
-    optimise(start_run(task, tmp_path / "run"))
+    finish_run(start_run(task, tmp_path / "run"))
     first, second = trials_of(tmp_path / "run")
     assert first["status"] == "failed" and second["status"] == "ok"
     assert first["error"].endswith("trial-0001/signals.csv: no column force, which the spec needs")
     from stl_lfd.optim import resume_run
 
-    optimise(resume_run(tmp_path / "run", trials=3))
+    finish_run(resume_run(tmp_path / "run", trials=3))
     assert [trial["status"] for trial in trials_of(tmp_path / "run")] == ["failed", "ok", "ok"]
 
 
@@ -176,7 +176,7 @@ def test_an_unsafe_reference_never_reaches_the_command(tmp_path, learned_model_f
     scene.write_text("description: tight\nsafety:\n  workspace: {lower: [0.2, -0.6, 0.1], upper: [0.8, 0.6, 0.8]}\n  max_speed: 0.6\n")
     monkeypatch.setenv("EXECUTOR_MARKER", str(tmp_path / "ran.txt"))
     task = executor_task(tmp_path, learned_model_file, trials=8, scene=str(scene))
-    optimise(start_run(task, tmp_path / "run"))
+    finish_run(start_run(task, tmp_path / "run"))
     trials = trials_of(tmp_path / "run")
     refused = [trial["trial"] for trial in trials if trial["status"] == "failed"]
     assert refused, "the tight speed limit should refuse some trials"

@@ -21,13 +21,19 @@ from typing import Any, Callable
 import numpy as np
 
 from stl_lfd.errors import ConfigError, ExecutionError, RunError, SignalError
-from stl_lfd.optim.acquisition import sobol_points
-from stl_lfd.optim.loop import Outcome, Trial, next_point
-from stl_lfd.optim.resume import check_resume
-from stl_lfd.optim.run import Recorder, SkillObjective, objective_for, prepared_from, task_models
-from stl_lfd.optim.rundir import SIGNALS_DIR, Pending, RunDirectory, StagedRun, check_new_run_path
+from stl_lfd.optim.loop import next_points
+from stl_lfd.optim.methods.base import sobol_points
+from stl_lfd.optim.objective import SkillObjective, objective_for, task_models
+from stl_lfd.optim.overrides import Overrides
+from stl_lfd.optim.runs.directory import SIGNALS_DIR, RunDirectory, check_new_run_path
+from stl_lfd.optim.runs.prepare import prepared_from
+from stl_lfd.optim.runs.recorder import Recorder
+from stl_lfd.optim.runs.records import Pending
+from stl_lfd.optim.runs.resume import check_resume
+from stl_lfd.optim.runs.staging import StagedRun
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Task
+from stl_lfd.optim.trials import Outcome, Trial
 from stl_lfd.signals import read_signal_csv, write_signal_csv
 from stl_lfd.sim import Reference, UnsafeReference, exchange_folder, read_reference_csv, write_reference_csv
 from stl_lfd.sim.command import EXECUTIONS_DIR, check_coverage, gate, tracking_error
@@ -79,7 +85,7 @@ def ask(
     out: Path,
     trials: int | None = None,
     file_task: Task | None = None,
-    given: dict[str, Any] | None = None,
+    given: Overrides = Overrides(),
     on_refused: Callable[[Trial], None] = lambda trial: None,
 ) -> Asked | None:
     """The pending trial of the run in `out`, or the next one; None when the run has all its
@@ -90,7 +96,7 @@ def ask(
     try:
         task = run.task()
         if file_task is not None:
-            check_resume(Path(out), task, run.inputs(), file_task, given or {})
+            check_resume(Path(out), task, run.inputs(), file_task, given)
         if trials is not None:
             task = task.with_overrides(trials=trials)
         pending = _live_pending(run)
@@ -101,10 +107,10 @@ def ask(
         design = run.initial_design()
         if design is not None and design.shape != (task.optimizer.initial, len(prepared.space.bounds[0])):
             design = None
-        features, plan = prepared.features(), prepared.plan()
+        method = prepared.search_method(design)
         while len(recorder.history) < task.optimizer.trials:
             start = time.perf_counter()
-            x, phase = next_point(recorder.history, prepared.space.bounds, task.optimizer, objective.composition, design, features, plan)
+            x, phase = next_points(recorder.history, method)[0]
             number = len(recorder.history) + 1
             try:
                 reference = objective.reference(prepared.space.apply(prepared.models, x))
@@ -144,22 +150,11 @@ def tell(out: Path, signals_path: Path | None, failure: str | None = None) -> To
             space, objective = objective_for(task, run.models(), execute=False)
             return _tell_initial(run, task, space, _scored(objective, reference, Path(signals_path), run, 0), pending)
         prepared = prepared_from(run, task, execute=False)
-        if failure is not None:
-            outcome, error = None, f"execution failed: {failure}"
-        else:
-            outcome, error = _scored(prepared.objective, reference, Path(signals_path), run, pending.trial), None
-        seconds = time.time() - pending.asked
-        robustness = None if outcome is None or not np.isfinite(outcome.robustness) else float(outcome.robustness)
-        if outcome is not None and robustness is None:
-            error = f"robustness is {outcome.robustness}"
-        trial = Trial(
-            pending.trial, pending.phase, pending.x, robustness, "ok" if robustness is not None else "failed", error,
-            optimizer_seconds=pending.optimizer_seconds, rollout_seconds=max(seconds, 0.0),
-            components=outcome.components if robustness is not None else None,
-            routes=outcome.routes if robustness is not None else None,
-        )  # fmt: skip
+        outcome = f"execution failed: {failure}" if failure is not None else _scored(prepared.objective, reference, Path(signals_path), run, pending.trial)
+        seconds = max(time.time() - pending.asked, 0.0)
+        trial = Trial.of_outcome(pending.trial, pending.phase, pending.x, outcome, pending.optimizer_seconds, seconds)
         recorder = Recorder(prepared)
-        recorder.record(trial, outcome.payload if outcome is not None else None, trial.wall_seconds)
+        recorder.record(trial, None if isinstance(outcome, str) else outcome.payload, trial.wall_seconds)
         run.clear_pending()
         return Told(trial, trial.robustness, recorder.summary())
     finally:

@@ -26,26 +26,24 @@ most the trial in flight.
 
 from __future__ import annotations
 
-import fcntl
 import json
-import math
 import os
-import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
-from stl_lfd.errors import ConfigError, OutputError, RunError
-from stl_lfd.files import check_output_folder, folder_mode, write_atomically
+from stl_lfd.errors import ConfigError, RunError
+from stl_lfd.files import check_output_folder, write_atomically
 from stl_lfd.hsmm import HSMM, load_model, save_model
-from stl_lfd.optim.loop import Trial, best_trial
+from stl_lfd.optim.runs.lock import RunLock
+from stl_lfd.optim.runs.records import Pending, finite, trial_from_json, trial_problem, trial_to_json
+from stl_lfd.optim.settings import SINGLE_SKILL
 from stl_lfd.optim.space import build_search_space
 from stl_lfd.optim.summary import Summary
-from stl_lfd.optim.task import SINGLE_SKILL, Task, load_task
+from stl_lfd.optim.task import Task, load_task
+from stl_lfd.optim.trials import Trial, best_trial
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable, write_signal_csv
 
@@ -58,7 +56,6 @@ SIGNALS_DIR = "signals"
 INPUTS_FILE = "inputs.json"
 PENDING_FILE = "pending.json"
 DESIGN_FILE = "design.json"
-LOCK_FILE = ".lock"
 
 
 class RunDirectory:
@@ -67,15 +64,6 @@ class RunDirectory:
     def __init__(self, path: Path, lock: "RunLock | None" = None) -> None:
         self.path = Path(path)
         self.lock = lock
-
-    @classmethod
-    def create(
-        cls, path: Path, task: Task, models: dict[str, HSMM], initial_signals: SignalTable, summary: Summary, inputs: dict[str, Any] | None = None
-    ) -> "RunDirectory":
-        """Write a new run directory in one step (built beside it, then renamed into place),
-        locked for writing by this process."""
-        with StagedRun(path) as staged:
-            return staged.commit(task, models, initial_signals, summary, inputs)
 
     @classmethod
     def open(cls, path: Path, for_writing: bool = False) -> "RunDirectory":
@@ -133,7 +121,7 @@ class RunDirectory:
             raise RunError(f"{path}: cannot read ({error})") from None
         except json.JSONDecodeError as error:
             raise RunError(f"{path}:{error.lineno}: not valid JSON ({error.msg})") from None
-        if not isinstance(data, dict) or not _finite(data.get("initial_robustness")):
+        if not isinstance(data, dict) or not finite(data.get("initial_robustness")):
             raise RunError(f"{path}: damaged (no finite 'initial_robustness')")
         try:
             return Summary.from_json(data)
@@ -154,12 +142,12 @@ class RunDirectory:
             if not line.strip():
                 continue
             try:
-                trial = _trial_from_json(json.loads(line))
+                trial = trial_from_json(json.loads(line))
             except (json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError):
                 if number < len(lines) - 1 or text.endswith("\n"):  # a whole line: edited, not killed
                     raise RunError(f"{path}:{number}: damaged (not a trial record)") from None
                 break
-            problem = _trial_problem(trial, len(trials) + 1)
+            problem = trial_problem(trial, len(trials) + 1)
             if problem:
                 raise RunError(f"{path}:{number}: damaged ({problem})")
             trials.append(trial)
@@ -173,7 +161,7 @@ class RunDirectory:
         if signals is not None:
             write_signal_csv(signals, self.signals_path(trial.trial))
         with open(self.path / TRIALS_FILE, "a") as stream:
-            stream.write(json.dumps(_trial_to_json(trial)) + "\n")
+            stream.write(json.dumps(trial_to_json(trial)) + "\n")
             stream.flush()
             os.fsync(stream.fileno())
 
@@ -218,7 +206,7 @@ class RunDirectory:
 
     def write_best_models(self, models: dict[str, HSMM]) -> None:
         for skill, model in models.items():
-            save_model(model, self.path / _model_file(BEST_MODEL_FILE, skill))
+            save_model(model, self.path / model_file(BEST_MODEL_FILE, skill))
 
     def has_best_models(self) -> bool:
         return bool(list(self.path.glob("best_model*.npz")))
@@ -227,133 +215,9 @@ class RunDirectory:
         write_atomically(self.path / SUMMARY_FILE, json.dumps(summary.to_json(), indent=2) + "\n")
 
 
-def _model_file(base: str, skill: str) -> str:
+def model_file(base: str, skill: str) -> str:
     """`model.npz` for the single skill, `model-NAME.npz` for a skill of a behaviour."""
     return base if skill == SINGLE_SKILL else base.replace(".npz", f"-{skill}.npz")
-
-
-@dataclass(frozen=True)
-class Pending:
-    """A trial handed out by `stlopt ask`, waiting for its signals (`pending.json`).
-
-    Attributes:
-        trial: its number (0: the unoptimised skill).
-        phase: what chose it (`sobol`, `stl`, ...; `initial` for trial 0).
-        x: its point (None for trial 0).
-        optimizer_seconds: time spent choosing it.
-        asked: when it was handed out (seconds since the epoch).
-    """
-
-    trial: int
-    phase: str
-    x: np.ndarray | None
-    optimizer_seconds: float
-    asked: float
-
-
-class StagedRun:
-    """A run directory being built under a temporary name beside `path`, locked by this process.
-    `commit` writes its files and renames it into place; leaving the `with` block without a
-    commit removes it, so a run directory appears complete or not at all.
-
-    Attributes:
-        path: the temporary folder (where work done before the commit, such as the exchange
-            folder of the unoptimised skill's execution, is written).
-    """
-
-    def __init__(self, destination: Path) -> None:
-        self.destination = Path(destination)
-        check_new_run_path(self.destination)
-        try:
-            self.destination.parent.mkdir(parents=True, exist_ok=True)
-            self.path = Path(tempfile.mkdtemp(prefix=f".{self.destination.name}.", dir=self.destination.parent))
-        except OSError as error:
-            raise OutputError(f"{self.destination}: cannot create the run directory ({error.strerror or error})") from None
-        self.committed = False
-        try:
-            self.path.chmod(folder_mode())  # mkdtemp makes it private; a run folder is an ordinary one
-            self.lock: RunLock | None = RunLock.acquire(self.path, self.destination)
-        except BaseException:
-            shutil.rmtree(self.path, ignore_errors=True)
-            raise
-
-    def commit(
-        self,
-        task: Task,
-        models: dict[str, HSMM],
-        initial_signals: SignalTable | None,
-        summary: Summary | None,
-        inputs: dict[str, Any] | None = None,
-        pending: Pending | None = None,
-        design: np.ndarray | None = None,
-    ) -> "RunDirectory":
-        """Write the run's files and rename it into place. A run created by `stlopt ask` has no
-        initial signals and summary yet, but the `pending` unoptimised skill and its initial
-        `design` (`M x d`)."""
-        staging = self.path
-        run = RunDirectory(staging)
-        write_atomically(staging / TASK_FILE, yaml.safe_dump(task.to_yaml_dict(), sort_keys=False))
-        if inputs is not None:
-            write_atomically(staging / INPUTS_FILE, json.dumps(inputs, indent=2) + "\n")
-        for skill, model in models.items():
-            save_model(model, staging / _model_file(MODEL_FILE, skill))
-        (staging / SIGNALS_DIR).mkdir()
-        if initial_signals is not None:
-            write_signal_csv(initial_signals, staging / SIGNALS_DIR / "initial.csv")
-        (staging / TRIALS_FILE).touch()
-        if summary is not None:
-            run.write_summary(summary)
-        if pending is not None:
-            run.write_pending(pending)
-        if design is not None:
-            write_atomically(staging / DESIGN_FILE, json.dumps([[float(value) for value in point] for point in design]) + "\n")
-        if self.destination.exists():
-            self.destination.rmdir()
-        os.replace(staging, self.destination)
-        self.committed = True
-        lock, self.lock = self.lock, None
-        return RunDirectory(self.destination, lock)
-
-    def __enter__(self) -> "StagedRun":
-        return self
-
-    def __exit__(self, *exception: object) -> None:
-        if not self.committed:
-            if self.lock is not None:
-                self.lock.release()
-            shutil.rmtree(self.path, ignore_errors=True)
-
-
-class RunLock:
-    """An exclusive advisory lock (`flock`) on a run directory's `.lock`, which names the holder's
-    PID. The kernel drops it when the process ends, however it ends."""
-
-    def __init__(self, stream: Any) -> None:
-        self.stream = stream
-
-    @classmethod
-    def acquire(cls, folder: Path, shown: Path) -> "RunLock":
-        try:
-            stream = open(folder / LOCK_FILE, "a+")
-        except OSError as error:
-            raise RunError(f"{shown}: cannot write to the run directory ({error.strerror or error})") from None
-        try:
-            fcntl.flock(stream.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            stream.seek(0)
-            holder = stream.read().strip() or "unknown"
-            stream.close()
-            raise RunError(f"{shown}: the run is being written by another stlopt process (PID {holder}); wait for it to end or stop it") from None
-        stream.seek(0)
-        stream.truncate()
-        stream.write(f"{os.getpid()}\n")
-        stream.flush()
-        return cls(stream)
-
-    def release(self) -> None:
-        if not self.stream.closed:
-            fcntl.flock(self.stream.fileno(), fcntl.LOCK_UN)
-            self.stream.close()
 
 
 def check_new_run_path(path: Path) -> None:
@@ -364,65 +228,12 @@ def check_new_run_path(path: Path) -> None:
     check_output_folder(path, "run directory")
 
 
-def _finite(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-
-
-def _trial_problem(trial: Trial, expected_number: int) -> str:
-    """What is wrong with a parsed trial record, or ''."""
-    if trial.trial != expected_number:
-        return f"trial {trial.trial} where trial {expected_number} was expected"
-    if trial.status not in ("ok", "failed"):
-        return f"status {trial.status!r}"
-    if trial.robustness is not None and not math.isfinite(trial.robustness):
-        return f"robustness {trial.robustness}"
-    if (trial.robustness is None) != (trial.status == "failed"):
-        return "a failed trial has a robustness, or a finished one has none"
-    if trial.x.ndim != 1 or not np.all(np.isfinite(trial.x)):
-        return "its point x is not a list of finite numbers"
-    return ""
-
-
 def _load_models(folder: Path, base: str) -> dict[str, HSMM]:
     single = folder / base
     if single.exists():
         return {SINGLE_SKILL: load_model(single)}
     prefix = base.replace(".npz", "-")
     return {path.stem[len(prefix) :]: load_model(path) for path in sorted(folder.glob(f"{prefix}*.npz"))}
-
-
-def _trial_to_json(trial: Trial) -> dict[str, Any]:
-    return {
-        "trial": trial.trial,
-        "phase": trial.phase,
-        "robustness": trial.robustness,
-        "satisfied": trial.satisfied,
-        "status": trial.status,
-        "error": trial.error,
-        "wall_seconds": round(trial.wall_seconds, 4),
-        "optimizer_seconds": round(trial.optimizer_seconds, 4),
-        "rollout_seconds": round(trial.rollout_seconds, 4),
-        "parameters": trial.parameters,
-        "components": trial.components,
-        **({"routes": trial.routes} if trial.routes else {}),
-        "x": [float(value) for value in trial.x],
-    }
-
-
-def _trial_from_json(data: dict[str, Any]) -> Trial:
-    return Trial(
-        trial=int(data["trial"]),
-        phase=str(data["phase"]),
-        x=np.array(data["x"], dtype=float),
-        robustness=None if data["robustness"] is None else float(data["robustness"]),
-        status=str(data["status"]),
-        error=data.get("error"),
-        optimizer_seconds=float(data.get("optimizer_seconds", 0.0)),
-        rollout_seconds=float(data.get("rollout_seconds", 0.0)),
-        parameters=dict(data.get("parameters", {})),
-        components=None if data.get("components") is None else {str(k): float(v) for k, v in data["components"].items()},
-        routes=None if data.get("routes") is None else {str(k): float(v) for k, v in data["routes"].items()},
-    )
 
 
 @dataclass(frozen=True)

@@ -15,27 +15,23 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from stl_lfd.errors import RunError
+from stl_lfd.optim.overrides import Overrides
 from stl_lfd.optim.task import Task, placements_to_yaml
 
 if TYPE_CHECKING:
     from stl_lfd.stl import ast
 
-# Command-line overrides, by their `Task.with_overrides` name, as the CLI spells them.
-OPTIONS = {
-    "spec": "--spec", "initial": "--init", "seed": "--seed", "backend": "--backend", "command": "--command", "method": "--method", "trials": "--iterations",
-    "workers": "--workers", "placements": "--place",
-}  # fmt: skip
 # Settings that may differ on resume: the budget, and the name (a label, not part of the problem).
 MAY_CHANGE = ("name",)
 
 
-def inputs_record(file_task: Task, overrides: dict[str, Any], task: Task, spec: ast.Spec | None = None) -> dict[str, Any]:
+def inputs_record(file_task: Task, overrides: Overrides, task: Task, spec: ast.Spec | None = None) -> dict[str, Any]:
     """What `inputs.json` holds for a run of `task`, which is `file_task` with `overrides`
     (`spec`: the parsed spec, when its file is not written yet)."""
     return {
         "task_file": str(file_task.source.resolve()),
         "task": _comparable(file_task),
-        "overrides": {key: _plain(value) for key, value in overrides.items() if value is not None and key != "trials"},
+        "overrides": {key: _plain(value) for key, value in overrides.given().items() if key != "trials"},
         "fingerprint": fingerprint(task, spec),
     }
 
@@ -56,19 +52,19 @@ def fingerprint(task: Task, spec: ast.Spec | None = None) -> dict[str, str]:
     return digests
 
 
-def check_resume(run_path: Path, recorded: Task, inputs: dict[str, Any] | None, file_task: Task, given: dict[str, Any]) -> None:
+def check_resume(run_path: Path, recorded: Task, inputs: dict[str, Any] | None, file_task: Task, given: Overrides) -> None:
     """Refuse to resume the run at `run_path` (whose task is `recorded`) with `file_task` and the
     command-line options `given`, when they ask for something else than the run did.
 
     Raises:
         RunError: naming the option, setting or file that differs, with both values.
     """
-    for key, value in given.items():
-        if value is None or key == "trials":
+    for key, value in given.given().items():
+        if key == "trials":
             continue
-        old, new = _plain(_setting(recorded, key)), _plain(value)
+        old, new = _plain(Overrides.setting(recorded, key)), _plain(value)
         if old != new:
-            raise RunError(f"{run_path}: {OPTIONS[key]} cannot change on --resume (the run has {old}, got {new}); start a new run with another --out")
+            raise RunError(f"{run_path}: {Overrides.option(key)} cannot change on --resume (the run has {old}, got {new}); start a new run with another --out")
     if inputs is None:  # a run recorded before inputs.json existed: options are all we can check
         return
     difference = _first_difference(_comparable(file_task), inputs["task"])
@@ -102,10 +98,6 @@ def _first_difference(ours: Any, theirs: Any, key: str = "") -> tuple[str, Any, 
                 return found
         return None
     return None if ours == theirs else (key, ours, theirs)
-
-
-def _setting(task: Task, key: str) -> Any:
-    return task.spec if key == "spec" else getattr(task, key) if key in ("backend", "command", "placements") else getattr(task.optimizer, key)
 
 
 def _plain(value: Any) -> Any:

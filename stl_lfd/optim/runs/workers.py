@@ -12,14 +12,11 @@ from __future__ import annotations
 import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
-from stl_lfd.hsmm import HSMM
-from stl_lfd.optim.loop import Outcome, describe_error
-from stl_lfd.optim.task import Task
+from stl_lfd.optim.trials import Outcome, describe_error
 
 _objective = None  # the worker process's own objective, built by `_start`
 _busy = False  # whether the worker is evaluating a trial (a stop then unwinds it first)
@@ -28,14 +25,15 @@ WORKER_NICENESS = 10
 
 
 class WorkerPool:
-    """`workers` processes that evaluate trials of `task` (see the module docstring)."""
+    """`workers` processes that evaluate trials, each with the objective `make_objective()`
+    builds in it (picklable; see the module docstring)."""
 
-    def __init__(self, task: Task, models: dict[str, HSMM], run_dir: Path | None, workers: int) -> None:
+    def __init__(self, make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]], workers: int) -> None:
         context = multiprocessing.get_context("spawn")
         saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
         os.environ.update({name: "1" for name in THREAD_VARIABLES})  # inherited by the workers as they start
         try:
-            self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_start, initargs=(task, models, run_dir))
+            self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_start, initargs=(make_objective,))
             for future in [self.pool.submit(_ready) for _ in range(workers)]:  # start every worker (and its world) now
                 future.result()
         except BaseException:
@@ -68,20 +66,16 @@ class WorkerPool:
         self.pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _start(task: Task, models: dict[str, HSMM], run_dir: Path | None) -> None:
+def _start(make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]]) -> None:
     global _objective
     import warnings
-
-    from stl_lfd.optim.run import objective_for
 
     stop_on_sigterm()
     # The next batch's proposal (in the main process) runs beside the batch's rollouts and is the
     # longer of the two: the rollouts yield the CPU to it, so that it never waits behind them.
     os.nice(WORKER_NICENESS)
     warnings.simplefilter("ignore")  # a worker has no terminal: tracking warnings would be lost
-    _, _objective = objective_for(task, models)
-    if run_dir is not None:
-        _objective.exchange_in(run_dir)
+    _objective = make_objective()
 
 
 def _ready() -> bool:

@@ -1,0 +1,173 @@
+"""The objective of a run: a point -> adapted models -> reference -> rollout -> robustness of the
+recorded signals and of the spec's parts; and its plan (the same on the kinematic backend)."""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from stl_lfd.errors import ConfigError, ExecutionError, SignalError, SpecError
+from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
+from stl_lfd.optim.methods.base import Composition
+from stl_lfd.optim.settings import SINGLE_SKILL
+from stl_lfd.optim.space import SearchSpace, build_search_space
+from stl_lfd.optim.task import Task
+from stl_lfd.optim.trials import Outcome
+from stl_lfd.poses import Pose
+from stl_lfd.signals import SignalTable
+from stl_lfd.sim import Backend, CommandBackend, Reference, Scene, execute, load_scene, new_backend
+from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
+from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
+
+
+class SkillObjective:
+    """x -> adapted models -> (behaviour) reference -> rollout -> robustness of the recorded
+    signals and of the spec's top-level parts (payload: the signals). It owns its backend (one
+    simulated world for all its rollouts) until `close`; without a backend (`execute=False` in
+    `objective_for`) it only scores signals recorded elsewhere.
+
+    With several object placements (`task.placements`), a trial executes once per placement and
+    its robustness is the worst; its parts are then the spec's parts at each placement, and its
+    payload the signals of the worst placement."""
+
+    def __init__(
+        self, models: dict[str, HSMM], space: SearchSpace, task: Task, behaviour: Behaviour | None, scene: Scene, parts: SpecParts, backend: Backend | None
+    ) -> None:
+        self.models, self.space, self.task, self.behaviour, self.parts = models, space, task, behaviour, parts
+        self.scenes = [scene.place(placement, str(task.source)) for placement in task.placements] or [scene]
+        self.scene = self.scenes[0]
+        self.backend = backend
+        # The parts the search method models: the spec's, or the spec's at each placement.
+        self.composition = spec_composition(parts) if len(self.scenes) == 1 else placement_composition(parts, task.placements)
+
+    def close(self) -> None:
+        if self.backend is not None:
+            self.backend.close()
+
+    def exchange_in(self, folder: Path) -> None:
+        """Write the command backend's exchange folders in `folder` (the run directory)."""
+        if isinstance(self.backend, CommandBackend):
+            self.backend.folder = Path(folder)
+
+    def __call__(self, x: np.ndarray, trial: int = 0) -> Outcome:
+        return self.evaluate(self.space.apply(self.models, x), trial)
+
+    def planned(self) -> "SkillObjective":
+        """This objective on the kinematic backend: it scores the plan (the reference itself)."""
+        from stl_lfd.sim.kinematic import KinematicBackend
+
+        plan = copy.copy(self)
+        plan.backend = KinematicBackend()
+        return plan
+
+    def plan_score(self):
+        """x (`d`) -> the plan's robustness of each part, then route (the prior of method `plan`)."""
+        planned, routes = self.planned(), self.composition.route_names
+
+        def score(x: np.ndarray) -> np.ndarray:
+            outcome = planned(x)
+            return np.array(list(outcome.components.values()) + [outcome.routes[route] for route in routes], dtype=float)
+
+        return score
+
+    def reference(self, models: dict[str, HSMM], scene: Scene | None = None) -> Reference:
+        """What executing `models` means: the behaviour's (or single skill's) reference, for the
+        object frames of `scene` (default: the first placement)."""
+        scene = self.scene if scene is None else scene
+        return reference_for(models, self.behaviour, scene.gripper_opening, self.task.duration, scene.frame_poses)
+
+    def evaluate(self, models: dict[str, HSMM], trial: int = 0) -> Outcome:
+        """Execute `models` as trial `trial` (0: the unoptimised skill) and score the signals."""
+        if self.backend is None:
+            raise ExecutionError("this objective only scores signals recorded elsewhere (it has no backend)")
+        if isinstance(self.backend, CommandBackend):
+            self.backend.trial = trial
+        outcomes = [self.score(execute(self.reference(models, scene), scene, self.backend, self.task.rate).signals) for scene in self.scenes]
+        if len(outcomes) == 1:
+            return outcomes[0]
+        worst = min(outcomes, key=lambda outcome: outcome.robustness)
+        values = [value for outcome in outcomes for value in outcome.components.values()]
+        return Outcome(worst.robustness, worst.payload, dict(zip(self.composition.names, values)))
+
+    def score(self, signals: SignalTable) -> Outcome:
+        """The robustness of recorded `signals`, and of each of the spec's parts."""
+        missing = sorted(self.parts.signals - set(signals.columns))
+        if missing:
+            raise SignalError(f"{signals.source}: no column {', '.join(missing)}, which the spec needs")
+        # The spec is evaluated once, part by part; composing the parts is exactly its robustness.
+        values = self.parts(signals.columns, signals.times)
+        routes = self.parts.route_values(signals.columns, signals.times) or None
+        return Outcome(self.parts.compose(values), signals, dict(zip(self.parts.names, values.tolist())), routes)
+
+
+def task_models(task: Task) -> dict[str, HSMM]:
+    """The skills of a task: learned from its demos, loaded, or those of its behaviour."""
+    if task.behaviour is not None:
+        return behaviour_models(load_behaviour(task.behaviour))
+    if task.demos is not None:
+        return {SINGLE_SKILL: learn_from_folder(task.demos, task.states)[0]}
+    return {SINGLE_SKILL: load_model(task.model)}
+
+
+def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = None, execute: bool = True) -> tuple[SearchSpace, SkillObjective]:
+    """The parameter space and the objective of `task` (with `spec` instead of reading
+    `task.spec` when given; with a backend of its own unless not `execute`); spec problems are
+    found here, before any trial: unknown signals, and windows that reach past the rollout
+    duration."""
+    if len(task.placements) > 1 and task.backend == "command":
+        raise ConfigError(f"{task.source}: several placements need a simulated backend (the command backend executes one reference per trial)")
+    space = build_search_space(models, task.parameters, task.source)
+    spec = load_spec(task.spec) if spec is None else spec
+    parts = split_spec(spec, task.semantics, task.nu, source=str(task.spec))
+    horizon = max(function.horizon for function in parts.functions)  # a conjunction looks as far as its parts
+    if horizon > task.duration + 1e-9:
+        raise ConfigError(
+            f"{task.source}: the spec {task.spec.name} looks {horizon:g} s ahead but rollouts last "
+            f"{task.duration:g} s ('duration'); lengthen the rollouts or shorten the spec's windows"
+        )
+    scene = load_scene(task.scene)
+    unknown = sorted(parts.signals - set(scene.recorded_signals))
+    if unknown:
+        raise SpecError(
+            f"signal {', '.join(unknown)} is not recorded by rollouts in the scene {scene.name} (they record {', '.join(scene.recorded_signals)})",
+            str(task.spec),
+        )
+    behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None
+    backend = new_backend(task.backend, task.command) if execute else None
+    return space, SkillObjective(models, space, task, behaviour, scene, parts, backend)
+
+
+def spec_composition(parts: SpecParts) -> Composition:
+    """The spec's parts and routes, as the search methods model them."""
+    return Composition(tuple(parts.names), parts.semantics, 1, tuple((route.name, route.part) for route in parts.routes))
+
+
+def placement_composition(parts: SpecParts, placements: tuple[dict[str, Pose], ...]) -> Composition:
+    """The spec's parts at each placement, named `placement 2 (holder 0.6,0.25,0.04 yaw 0.3): PART`,
+    composed within a placement by the spec's semantics and by the minimum over placements
+    (each part at each placement gets its own GP output; no routes)."""
+    labels = []
+    for index, placement in enumerate(placements):
+        poses = ", ".join(f"{name} {','.join(f'{v:g}' for v in pose.position)} yaw {pose.yaw:g}" for name, pose in placement.items())
+        labels.append(f"placement {index + 1} ({poses})")
+    return Composition(tuple(f"{label}: {part}" for label in labels for part in parts.names), parts.semantics, len(labels))
+
+
+@dataclass(frozen=True)
+class ObjectiveFactory:
+    """Makes the objective of `task` in another process (a parallel worker): picklable, so
+    that the worker builds its own world, or its own executor command, once at start-up.
+    `run_dir`: where the command backend's exchange folders go (None: a scratch folder)."""
+
+    task: Task
+    models: dict[str, HSMM]
+    run_dir: Path | None = None
+
+    def __call__(self) -> SkillObjective:
+        _, objective = objective_for(self.task, self.models)
+        if self.run_dir is not None:
+            objective.exchange_in(self.run_dir)
+        return objective
