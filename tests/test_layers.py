@@ -81,3 +81,62 @@ def test_light_imports_load_no_heavy_library(module):
     code = f"import sys, {module}; print(','.join(name for name in ('torch', 'botorch', 'pybullet', 'matplotlib', 'scipy.ndimage') if name in sys.modules))"
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert loaded == ""
+
+
+def import_graph() -> dict[str, set[str]]:
+    """Module -> the stl_lfd modules it imports (anywhere but under `if TYPE_CHECKING`), with
+    `from package import module` counted as an import of the module, not of the package."""
+    modules = {module_name(path): path for path in PACKAGE.rglob("*.py")}
+    graph = {}
+    for name, path in modules.items():
+        tree = ast.parse(path.read_text())
+        typing_only = {id(node) for block in ast.walk(tree) if isinstance(block, ast.If) and getattr(block.test, "id", "") == "TYPE_CHECKING" for node in ast.walk(block)}
+        targets = set()
+        for node in ast.walk(tree):
+            if id(node) in typing_only:
+                continue
+            if isinstance(node, ast.Import):
+                targets |= {alias.name for alias in node.names if alias.name in modules}
+            elif isinstance(node, ast.ImportFrom) and node.module in modules:
+                submodules = {f"{node.module}.{alias.name}" for alias in node.names} & set(modules)
+                targets |= submodules or {node.module}
+                if len(submodules) < len(node.names):
+                    targets.add(node.module)
+        graph[name] = targets - {name}
+    return graph
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The import cycles of `graph` (its strongly connected components of more than one module)."""
+    order, low, stack, found, counter = {}, {}, [], [], iter(range(len(graph) * 2))
+
+    def visit(module: str) -> None:
+        order[module] = low[module] = next(counter)
+        stack.append(module)
+        for target in graph[module]:
+            if target not in order:
+                visit(target)
+                low[module] = min(low[module], low[target])
+            elif target in stack:
+                low[module] = min(low[module], order[target])
+        if low[module] == order[module]:
+            component = []
+            while not component or component[-1] != module:
+                component.append(stack.pop())
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for module in sorted(graph):
+        if module not in order:
+            visit(module)
+    return found
+
+
+def test_no_import_cycles():
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert cycles(import_graph()) == []
+
+
+def test_the_optimiser_is_small_modules():
+    lengths = {path.relative_to(ROOT).as_posix(): len(path.read_text().splitlines()) for path in (PACKAGE / "optim").rglob("*.py")}
+    assert {path: length for path, length in lengths.items() if length > 300} == {}

@@ -1,6 +1,6 @@
 """Optimisation of skill parameters for STL specifications (the paper's Algorithm 1).
 
-    task.py, settings.py, overrides.py   what to optimise and how: task files, `Parameters`,
+    task.py, settings.py                 what to optimise and how: task files, `Parameters`,
                                          `Optimizer`, command-line `Overrides`
     space.py, features.py                the parameters that move, their bounds; what a GP sees
     objective.py                         a point -> adapted skill -> rollout -> robustness of parts
@@ -36,7 +36,7 @@ _HOMES = {
     "SINGLE_SKILL": "stl_lfd.optim.settings",
     "Optimizer": "stl_lfd.optim.settings",
     "Parameters": "stl_lfd.optim.settings",
-    "Overrides": "stl_lfd.optim.overrides",
+    "Overrides": "stl_lfd.optim.task",
     "Task": "stl_lfd.optim.task",
     "load_task": "stl_lfd.optim.task",
     "optimize": "stl_lfd.optim.api",

@@ -30,9 +30,21 @@ CASES = [
     for problem in ("phi1_first", "phi2_seed12", "hold_l3")
     for method in ("plan", "stl", "pi", "logei", "random")
 ] + [
-    ("phi1_first+lag/plan", "benchmarks/problems/phi1_first.yaml", {"backend": "kinematic", "method": "plan", "initial": 3, "trials": 6, "seed": 1, "lag": True}),
-    ("phi2_first/stl/workers2", "benchmarks/problems/phi2_first.yaml", {"backend": "kinematic", "method": "stl", "initial": 4, "trials": 8, "seed": 2, "workers": 2}),
-    ("phi2_first/plan/workers2", "benchmarks/problems/phi2_first.yaml", {"backend": "kinematic", "method": "plan", "initial": 4, "trials": 8, "seed": 2, "workers": 2}),
+    (
+        "phi1_first+lag/plan",
+        "benchmarks/problems/phi1_first.yaml",
+        {"backend": "kinematic", "method": "plan", "initial": 3, "trials": 6, "seed": 1, "lag": True},
+    ),
+    (
+        "phi2_first/stl/workers2",
+        "benchmarks/problems/phi2_first.yaml",
+        {"backend": "kinematic", "method": "stl", "initial": 4, "trials": 8, "seed": 2, "workers": 2},
+    ),
+    (
+        "phi2_first/plan/workers2",
+        "benchmarks/problems/phi2_first.yaml",
+        {"backend": "kinematic", "method": "plan", "initial": 4, "trials": 8, "seed": 2, "workers": 2},
+    ),
     ("phi1/plan/pybullet", "configs/phi1.yaml", {"trials": 12}),
     ("phi2/plan/pybullet", "configs/phi2.yaml", {"trials": 12}),
 ]

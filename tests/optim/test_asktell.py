@@ -13,10 +13,10 @@ from typer.testing import CliRunner
 from stl_lfd.cli import app
 from stl_lfd.errors import RunError, SignalError
 from stl_lfd.optim import finish_run, load_task, start_run
-from stl_lfd.optim.overrides import Overrides
 from stl_lfd.optim.runs.asktell import ask, ask_new, tell
 from stl_lfd.optim.runs.directory import RunDirectory
 from stl_lfd.optim.runs.resume import inputs_record
+from stl_lfd.optim.task import Overrides
 from stl_lfd.signals import write_signal_csv
 from stl_lfd.sim import Command, execute, load_scene, read_reference_csv
 

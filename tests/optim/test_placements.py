@@ -138,9 +138,9 @@ def test_optimize_from_python_takes_placements():
 
 def test_executions_outside_stlopt_take_one_placement(tmp_path):
     from stl_lfd.optim.objective import objective_for
-    from stl_lfd.optim.overrides import Overrides
     from stl_lfd.optim.runs.asktell import ask_new
     from stl_lfd.optim.runs.resume import inputs_record
+    from stl_lfd.optim.task import Overrides
 
     task = load_task(placed_task(tmp_path))
     with pytest.raises(ConfigError, match="takes one placement"):

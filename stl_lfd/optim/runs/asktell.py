@@ -24,7 +24,6 @@ from stl_lfd.errors import ConfigError, ExecutionError, RunError, SignalError
 from stl_lfd.optim.loop import next_points
 from stl_lfd.optim.methods.base import sobol_points
 from stl_lfd.optim.objective import SkillObjective, objective_for, task_models
-from stl_lfd.optim.overrides import Overrides
 from stl_lfd.optim.runs.directory import SIGNALS_DIR, RunDirectory, check_new_run_path
 from stl_lfd.optim.runs.prepare import prepared_from
 from stl_lfd.optim.runs.recorder import Recorder
@@ -32,7 +31,7 @@ from stl_lfd.optim.runs.records import Pending
 from stl_lfd.optim.runs.resume import check_resume
 from stl_lfd.optim.runs.staging import StagedRun
 from stl_lfd.optim.summary import Summary
-from stl_lfd.optim.task import Task
+from stl_lfd.optim.task import Overrides, Task
 from stl_lfd.optim.trials import Outcome, Trial
 from stl_lfd.signals import read_signal_csv, write_signal_csv
 from stl_lfd.sim import Reference, UnsafeReference, exchange_folder, read_reference_csv, write_reference_csv

@@ -15,8 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from stl_lfd.errors import RunError
-from stl_lfd.optim.overrides import Overrides
-from stl_lfd.optim.task import Task, placements_to_yaml
+from stl_lfd.optim.task import Overrides, Task, placements_to_yaml
 
 if TYPE_CHECKING:
     from stl_lfd.stl import ast
