@@ -65,6 +65,15 @@ PLACE_HELP = "Place an object frame of the scene: NAME=x,y[,z[,yaw]] (metres, ya
 COMMAND_HELP = "With --backend command: the executor to run, with {reference} and {signals} for the two CSV paths (no shell)."
 COMMAND_TIMEOUT_HELP = "Seconds after which the executor is stopped and the trial fails (default: the task's, or 600)."
 
+# Options that several commands share, defined once (Typer reads a parameter's default as its option).
+CommandOption = typer.Option(None, "--command", help=COMMAND_HELP)
+CommandTimeoutOption = typer.Option(None, "--command-timeout", help=COMMAND_TIMEOUT_HELP)
+IterationsOption = typer.Option(None, "--iterations", "-N", help="Total number of trials N (default: the task's).")
+InitOption = typer.Option(
+    None, "--init", "-M", help="Initial trials M: scrambled Sobol points, or with method plan chosen on their plans (default: the task's)."
+)
+SeedOption = typer.Option(None, "--seed", help="Seed of the initial trials and of the acquisition optimiser.")
+
 
 @contextmanager
 def user_errors(on_interrupt: str = "interrupted") -> Iterator[None]:
@@ -263,8 +272,8 @@ def rollout(
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="Signal CSV to write (default: stdout)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to execute (default: the skill's expected duration)."),
     rate: float = typer.Option(100.0, "--rate", help="Recording rate in samples per second."),
-    command: Optional[str] = typer.Option(None, "--command", help=COMMAND_HELP),
-    command_timeout: Optional[float] = typer.Option(None, "--command-timeout", help=COMMAND_TIMEOUT_HELP),
+    command: Optional[str] = CommandOption,
+    command_timeout: Optional[float] = CommandTimeoutOption,
     place: list[str] = typer.Option([], "--place", help=PLACE_HELP),
 ) -> None:
     """Execute a skill model or a behaviour once and write the recorded signals
@@ -279,32 +288,27 @@ def rollout(
     import time
 
     from stl_lfd.files import check_output_file
-    from stl_lfd.hsmm import load_model
     from stl_lfd.signals import write_signal_csv
-    from stl_lfd.sim import execute, load_scene
-    from stl_lfd.skill import behaviour_models, load_behaviour, reference_for
+    from stl_lfd.skill import PlacedSkill
 
     with user_errors():
         _check_duration_and_rate(duration, rate)
         if output is not None:
             check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
         runner = _backend(backend.value, _command(command, command_timeout, None))
-        behaviour = load_behaviour(model_file) if model_file.suffix in (".yaml", ".yml") else None
-        world = load_scene(scene or (behaviour.scene if behaviour is not None else "free_space"))
-        world = world.place(world.placement_from_options(place))
-        models = behaviour_models(behaviour) if behaviour is not None else {"skill": load_model(model_file)}
-        reference = reference_for(models, behaviour, world.gripper_opening, duration, world.frame_poses)
+        skill = PlacedSkill.load(model_file, scene, place, duration)
+        reference = skill.reference()
         start = time.perf_counter()
         if backend is BackendOption.pybullet and reference.duration > LONG_ROLLOUT_SECONDS:
             with _progress_bar(f"simulating {reference.duration:.0f} s", int(reference.duration)) as advance:
-                result = execute(reference, world, runner, rate, _whole_seconds(advance))
+                result = skill.execute(runner, rate, _whole_seconds(advance), reference)
         else:
-            result = execute(reference, world, runner, rate)
+            result = skill.execute(runner, rate, reference=reference)
         elapsed = time.perf_counter() - start
         write_signal_csv(result.signals, output if output is not None else sys.stdout)
     simulated = result.signals.duration
     print(
-        f"{backend.value} rollout in {world.name}: {simulated:.2f} s simulated in {elapsed:.2f} s "
+        f"{backend.value} rollout in {skill.scene.name}: {simulated:.2f} s simulated in {elapsed:.2f} s "
         f"({simulated / max(elapsed, 1e-9):.0f}x real time); tracking error RMS {1000 * result.tracking_rms:.2f} mm, "
         f"worst {1000 * result.tracking_max:.2f} mm" + (f"; wrote {output}" if output is not None else ""),
         file=sys.stderr,
@@ -412,11 +416,9 @@ def replay(
 def optimize(
     task_file: Path = typer.Argument(..., metavar="TASK_FILE", help="Task file (YAML), e.g. configs/phi1.yaml."),
     spec: Optional[Path] = typer.Option(None, "--spec", help="Use this STL spec instead of the task's."),
-    iterations: Optional[int] = typer.Option(None, "--iterations", "-N", help="Total number of trials N (default: the task's)."),
-    init: Optional[int] = typer.Option(
-        None, "--init", "-M", help="Initial trials M: scrambled Sobol points, or with method plan chosen on their plans (default: the task's)."
-    ),
-    seed: Optional[int] = typer.Option(None, "--seed", help="Seed of the initial trials and of the acquisition optimiser."),
+    iterations: Optional[int] = IterationsOption,
+    init: Optional[int] = InitOption,
+    seed: Optional[int] = SeedOption,
     out: Optional[Path] = typer.Option(None, "--out", help="Run directory (default: runs/<task name>)."),
     resume: bool = typer.Option(False, "--resume", help="Continue the run in --out (or runs/<task name>) where it stopped."),
     backend: Optional[BackendOption] = typer.Option(None, help="Execution backend (default: the task's)."),
@@ -424,8 +426,8 @@ def optimize(
         None,
         help="stl (composite BO on the spec's parts), plan (the same, with each part's plan as its prior), pi (the paper), logei, or random search (default: the task's).",
     ),
-    command: Optional[str] = typer.Option(None, "--command", help=COMMAND_HELP),
-    command_timeout: Optional[float] = typer.Option(None, "--command-timeout", help=COMMAND_TIMEOUT_HELP),
+    command: Optional[str] = CommandOption,
+    command_timeout: Optional[float] = CommandTimeoutOption,
     workers: Optional[int] = typer.Option(None, "--workers", help="Trials run at once, each batch proposed together (default: the task's, or 1)."),
     place: list[str] = typer.Option([], "--place", help=PLACE_HELP + " Replaces the task's placements."),
 ) -> None:
@@ -476,11 +478,9 @@ def ask(
     target: Path = typer.Argument(..., metavar="TASK_FILE_OR_RUN", help="A task file (starts a run) or a run directory."),
     out: Optional[Path] = typer.Option(None, "--out", help="With a task file: the run directory (default: runs/<task name>)."),
     spec: Optional[Path] = typer.Option(None, "--spec", help="Use this STL spec instead of the task's (a new run only)."),
-    iterations: Optional[int] = typer.Option(None, "--iterations", "-N", help="Total number of trials N (default: the task's)."),
-    init: Optional[int] = typer.Option(
-        None, "--init", "-M", help="Initial trials M: scrambled Sobol points, or with method plan chosen on their plans (default: the task's)."
-    ),
-    seed: Optional[int] = typer.Option(None, "--seed", help="Seed of the initial trials and of the acquisition optimiser."),
+    iterations: Optional[int] = IterationsOption,
+    init: Optional[int] = InitOption,
+    seed: Optional[int] = SeedOption,
     method: Optional[MethodOption] = typer.Option(None, help="Optimiser method (default: the task's)."),
 ) -> None:
     """Hand out the next trial to execute elsewhere: write its reference CSV, print its path.

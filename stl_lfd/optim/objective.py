@@ -18,8 +18,9 @@ from stl_lfd.optim.task import Task
 from stl_lfd.optim.trials import Outcome
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
-from stl_lfd.sim import Backend, CommandBackend, Reference, Scene, execute, load_scene, new_backend
-from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour, reference_for
+from stl_lfd.sim import Backend, CommandBackend, Reference, Scene, load_scene, new_backend
+from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour
+from stl_lfd.skill.placed import PlacedSkill, placed_scene
 from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
 
 
@@ -36,12 +37,13 @@ class SkillObjective:
     def __init__(
         self, models: dict[str, HSMM], space: SearchSpace, task: Task, behaviour: Behaviour | None, scene: Scene, parts: SpecParts, backend: Backend | None
     ) -> None:
-        self.models, self.space, self.task, self.behaviour, self.parts = models, space, task, behaviour, parts
-        self.scenes = [scene.place(placement, str(task.source)) for placement in task.placements] or [scene]
-        self.scene = self.scenes[0]
+        self.models, self.space, self.task, self.parts = models, space, task, parts
+        scenes = [placed_scene(scene, placement, str(task.source)) for placement in task.placements] or [scene]
+        self.placed = [PlacedSkill(models, behaviour, scene, task.duration) for scene in scenes]  # one per placement
+        self.scene = scenes[0]
         self.backend = backend
         # The parts the search method models: the spec's, or the spec's at each placement.
-        self.composition = spec_composition(parts) if len(self.scenes) == 1 else placement_composition(parts, task.placements)
+        self.composition = spec_composition(parts) if len(scenes) == 1 else placement_composition(parts, task.placements)
 
     def close(self) -> None:
         if self.backend is not None:
@@ -73,11 +75,9 @@ class SkillObjective:
 
         return score
 
-    def reference(self, models: dict[str, HSMM], scene: Scene | None = None) -> Reference:
-        """What executing `models` means: the behaviour's (or single skill's) reference, for the
-        object frames of `scene` (default: the first placement)."""
-        scene = self.scene if scene is None else scene
-        return reference_for(models, self.behaviour, scene.gripper_opening, self.task.duration, scene.frame_poses)
+    def reference(self, models: dict[str, HSMM]) -> Reference:
+        """What executing `models` means at the first placement (see `PlacedSkill.reference`)."""
+        return self.placed[0].with_models(models).reference()
 
     def evaluate(self, models: dict[str, HSMM], trial: int = 0) -> Outcome:
         """Execute `models` as trial `trial` (0: the unoptimised skill) and score the signals."""
@@ -85,7 +85,7 @@ class SkillObjective:
             raise ExecutionError("this objective only scores signals recorded elsewhere (it has no backend)")
         if isinstance(self.backend, CommandBackend):
             self.backend.trial = trial
-        outcomes = [self.score(execute(self.reference(models, scene), scene, self.backend, self.task.rate).signals) for scene in self.scenes]
+        outcomes = [self.score(placed.with_models(models).execute(self.backend, self.task.rate).signals) for placed in self.placed]
         if len(outcomes) == 1:
             return outcomes[0]
         worst = min(outcomes, key=lambda outcome: outcome.robustness)

@@ -16,9 +16,10 @@ from stl_lfd.errors import ConfigError, ExecutionError
 from stl_lfd.files import atomic_output, check_output_file
 from stl_lfd.hsmm import HSMM
 from stl_lfd.poses import Pose
-from stl_lfd.sim import DEFAULT_RATE, execute
-from stl_lfd.skill.behaviour import load_behaviour, load_skill, reference_for
+from stl_lfd.sim import DEFAULT_RATE
+from stl_lfd.skill.behaviour import load_behaviour, load_skill
 from stl_lfd.skill.execution import scene_with_spec_regions
+from stl_lfd.skill.placed import PlacedSkill, placed_scene
 from stl_lfd.stl.evaluate import evaluate_table
 
 ProgressFactory = Callable[[str, int], AbstractContextManager[Callable[[int], None]]]
@@ -70,36 +71,36 @@ def replay_skill(request: ReplayRequest, gui: bool, video: Path | None, progress
 
         video = check_output_file(video if video is not None else skill.default_video, VIDEO_SUFFIXES, "video")
     scene = scene_with_spec_regions(skill.scene, skill.spec)
-    placement = scene.placement_from_options(list(request.place)) if request.place else (skill.placements[0] if skill.placements else {})
-    scene = scene.place(placement)
+    placement = request.place if request.place else (skill.placements[0] if skill.placements else {})
     behaviour = load_behaviour(skill.behaviour) if skill.behaviour is not None else None
-    reference = reference_for(skill.models, behaviour, scene.gripper_opening, skill.duration, scene.frame_poses)
+    placed = PlacedSkill(skill.models, behaviour, placed_scene(scene, placement), skill.duration)
     if gui:
         from stl_lfd.sim.panda import PyBulletBackend, pace_real_time
 
         backend = PyBulletBackend(gui=True)
         try:
-            rollout = execute(reference, scene, backend, DEFAULT_RATE, pace_real_time())
+            rollout = placed.execute(backend, DEFAULT_RATE, pace_real_time())
         finally:
             backend.close()
         written, frames = None, 0
     else:
         written = video
-        rollout, frames = _film(reference, scene, written, progress)
+        rollout, frames = _film(placed, written, progress)
     robustness = None
     if skill.spec is not None:
         robustness = evaluate_table(skill.spec, rollout.signals, skill.semantics, skill.nu).robustness
     return ReplayOutcome(robustness, skill.semantics, skill.spec, written, frames)
 
 
-def _film(reference, scene, path: Path, progress: ProgressFactory):
+def _film(placed: PlacedSkill, path: Path, progress: ProgressFactory):
     """Execute while filming into `path`; the file appears only once it is complete."""
     from stl_lfd.sim.video import VideoRecorder, frame_count
 
-    with atomic_output(path) as partial, progress(f"filming {path.name}", frame_count(reference.duration, scene.camera.fps)) as advance:
-        recorder = VideoRecorder(partial, scene.camera, advance)
+    reference, camera = placed.reference(), placed.scene.camera
+    with atomic_output(path) as partial, progress(f"filming {path.name}", frame_count(reference.duration, camera.fps)) as advance:
+        recorder = VideoRecorder(partial, camera, advance)
         try:
-            rollout = execute(reference, scene, "pybullet", DEFAULT_RATE, recorder)
+            rollout = placed.execute("pybullet", DEFAULT_RATE, recorder, reference)
         finally:
             recorder.close()
     return rollout, recorder.frames
@@ -112,16 +113,17 @@ def resolve_skill(request: ReplayRequest) -> Skill:
         from stl_lfd.optim.runs.directory import trial_skill
 
         run = trial_skill(source, request.trial)
+        task = run.task
         return Skill(
             models=run.models,
-            behaviour=run.behaviour,
-            spec=request.spec or run.spec,
-            scene=request.scene or run.scene,
-            duration=request.duration or run.duration,
-            semantics=request.semantics or run.semantics,
-            nu=run.nu,
+            behaviour=task.behaviour,
+            spec=request.spec or task.spec,
+            scene=request.scene or task.scene,
+            duration=request.duration or task.duration,
+            semantics=request.semantics or task.semantics,
+            nu=task.nu,
             default_video=source / f"replay-trial-{run.trial}.mp4",
-            placements=run.placements,
+            placements=task.placements,
         )
     if not source.exists():
         raise ConfigError(f"{source}: no such model file, behaviour file or run directory")

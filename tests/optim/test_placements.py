@@ -66,8 +66,8 @@ def test_several_placements_score_the_worst_and_record_each(tmp_path):
     assert len(task.placements) == 2 and task.placements[1]["holder"].yaw == -0.3
     prepared = start_run(task, tmp_path / "run")
     objective = prepared.objective
-    assert len(objective.scenes) == 2 and objective.scenes[1].frame_poses["shaft"].position == (0.48, -0.28, 0.08)
-    references = [objective.reference(prepared.models, scene) for scene in objective.scenes]
+    assert len(objective.placed) == 2 and objective.placed[1].scene.frame_poses["shaft"].position == (0.48, -0.28, 0.08)
+    references = [placed.reference() for placed in objective.placed]
     assert np.abs(references[0].positions[-1] - references[1].positions[-1]).max() > 0.05  # the skill follows the holder
     finish_run(prepared)
     trials = [json.loads(line) for line in (tmp_path / "run" / "trials.jsonl").read_text().splitlines()]

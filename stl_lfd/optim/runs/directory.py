@@ -238,17 +238,12 @@ def _load_models(folder: Path, base: str) -> dict[str, HSMM]:
 
 @dataclass(frozen=True)
 class TrialSkill:
-    """The models of one trial of a run, with the run's settings (for `stlopt replay`)."""
+    """The models of one trial of a run (0: the unoptimised skill), and the run's task (its
+    spec, scene, duration, semantics and placements), for `stlopt replay`."""
 
     trial: int
     models: dict[str, HSMM]
-    behaviour: Path | None
-    spec: Path
-    scene: str
-    duration: float
-    semantics: str
-    nu: float
-    placements: tuple[dict[str, Pose], ...] = ()
+    task: Task
 
 
 def trial_skill(path: Path, which: str = "best") -> TrialSkill:
@@ -267,7 +262,7 @@ def trial_skill(path: Path, which: str = "best") -> TrialSkill:
     if number > 0:
         found = [trial for trial in trials if trial.trial == number]
         models = build_search_space(models, task.parameters, task.source).apply(models, found[0].x)
-    return TrialSkill(number, models, task.behaviour, task.spec, task.scene, task.duration, task.semantics, task.nu, task.placements)
+    return TrialSkill(number, models, task)
 
 
 def _trial_number(which: str, finished: int, path: Path) -> int:
