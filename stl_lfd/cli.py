@@ -486,8 +486,9 @@ def ask(
     """Hand out the next trial to execute elsewhere: write its reference CSV, print its path.
 
     The first ask of a task file creates the run with trial 0, the unoptimised skill. Execute
-    the reference (see the README's contract), then record the signals with 'stlopt tell'.
-    Asking again before telling prints the same trial. When the run has all its trials,
+    the reference (the executor's contract is on the documentation's page on execution and
+    real robots), then record the signals with 'stlopt tell'. Asking again before telling
+    prints the same trial. When the run has all its trials,
     nothing is printed on stdout. The same seed gives the same trials as 'stlopt optimize'.
     References outside the scene's safety limits are recorded as failed trials, never handed out.
 

@@ -36,6 +36,6 @@ def learned_model_file(learned_model, tmp_path_factory):
 def pytest_collection_modifyitems(items):
     """The longest tests (`heavy`) first, then the other end-to-end ones (`slow`), then the
     rest, each group in its own order: handed out one at a time (`--dist loadgroup`; the
-    README's examples go together, first), the two workers start on the long tests and finish
-    together on short ones."""
+    examples of each documentation page go together, first), the two workers start on the
+    long tests and finish together on short ones."""
     items.sort(key=lambda item: (item.get_closest_marker("heavy") is None, item.get_closest_marker("slow") is None))
