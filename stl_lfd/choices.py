@@ -5,4 +5,4 @@ the command line builds its choices from them. A leaf module (no imports), so th
 
 SEMANTICS = ("classic", "new")  # space robustness; the robustness of Varnai & Dimarogonas
 BACKENDS = ("pybullet", "kinematic", "command")  # a simulated Panda; the reference itself; an external program
-RECORDED_SIGNALS = ("x", "y", "z", "gripper", "force")  # what every rollout records
+RECORDED_SIGNALS = ("x", "y", "z", "gripper", "force", "qx", "qy", "qz", "qw", "tilt")  # what every rollout records

@@ -162,6 +162,7 @@ def robustness(
 def learn(
     demos_dir: Path = typer.Argument(..., metavar="DEMOS_DIR", help="Folder of demonstration CSVs (t,x,y,z[,...])."),
     states: int = typer.Option(6, "-K", "--states", help="Number of HSMM states K."),
+    restarts: int = typer.Option(1, "--restarts", min=1, help="EM starts: k-bins, then random segmentations; the most likely model is kept."),
     output: Path = typer.Option(Path("model.npz"), "-o", "--output", help="Model file to write (.npz)."),
     sample_period: Optional[float] = typer.Option(
         None, "--sample-period", help="Resample the demos to this period in seconds (default: their median period, at most 50 Hz)."
@@ -195,7 +196,7 @@ def learn(
         if plot is not None:
             check_output_file(plot, FIGURE_SUFFIXES, "figure")
         chosen = [name.strip() for name in frames.split(",")] if frames is not None else None
-        model, sequences = learn_from_folder(demos_dir, states, sample_period, chosen)
+        model, sequences = learn_from_folder(demos_dir, states, sample_period, chosen, restarts)
         save_model(model, output)
         shown_model = demonstrated_skill(model, demos_dir)
         if plot is not None:
@@ -231,7 +232,8 @@ def retrieve(
 ) -> None:
     """Write the reference trajectory of a skill model as a signal CSV.
 
-    Columns: t, the model's signals (x, y, z, ...) and `state`, the HSMM state followed (1-based).
+    Columns: t, the model's signals (x, y, z, ...; for a skill with orientation, qx, qy, qz, qw)
+    and `state`, the HSMM state followed (1-based).
     A model learned with frames (TP-HSMM) is retrieved for the object poses given by --frame.
 
     Examples:
@@ -243,6 +245,7 @@ def retrieve(
     from stl_lfd.files import check_output_file
     from stl_lfd.hsmm import frame_poses, load_model
     from stl_lfd.hsmm import retrieve as retrieve_trajectory
+    from stl_lfd.rotations import QUATERNION_COLUMNS, ROTATION_COLUMNS
     from stl_lfd.signals import SignalTable, write_signal_csv
 
     with user_errors():
@@ -255,7 +258,9 @@ def retrieve(
         except ModelError as error:
             whose = "" if duration is not None else f" (its expected duration, {model.expected_duration():.3g} s)"
             raise ModelError(f"{model_file}{whose}: {error}") from None
-        columns = {name: trajectory.positions[:, index] for index, name in enumerate(trajectory.signal_names)}
+        columns = {name: trajectory.positions[:, index] for index, name in enumerate(trajectory.signal_names) if name not in ROTATION_COLUMNS}
+        if trajectory.orientations is not None:
+            columns.update(zip(QUATERNION_COLUMNS, trajectory.orientations.T))
         columns["state"] = trajectory.states + 1.0
         write_signal_csv(SignalTable(trajectory.times, columns), output if output is not None else sys.stdout)
     if output is not None:

@@ -1,4 +1,5 @@
-"""Object poses: a position in the robot base frame and a yaw about the vertical axis.
+"""Object poses: a position in the robot base frame and an orientation: a yaw about the vertical
+axis, or any rotation (a unit quaternion).
 
 A leaf module shared by the skill models (task-parameterised HSMMs are learned in the frames
 of the objects) and the scenes (objects are placed at poses); it imports neither.
@@ -13,6 +14,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+import stl_lfd.rotations as rotations
 from stl_lfd.errors import ConfigError
 from stl_lfd.yamlfile import check_keys, number, vector
 
@@ -21,14 +23,29 @@ BASE_FRAME = "base"  # the robot base frame: always at the origin, never placed
 
 @dataclass(frozen=True)
 class Pose:
-    """`position` (x, y, z, metres) and `yaw` (radians, about z) of a frame in the base frame."""
+    """`position` (x, y, z, metres) of a frame in the base frame, and its orientation: `yaw`
+    (radians, about z), or `quaternion` (x, y, z, w; unit), a full orientation that replaces
+    the yaw when given."""
 
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)
     yaw: float = 0.0
+    quaternion: tuple[float, float, float, float] | None = None
+
+    @property
+    def orientation(self) -> np.ndarray:
+        """The frame's orientation as a unit quaternion (x, y, z, w)."""
+        return np.asarray(self.quaternion, dtype=float) if self.quaternion is not None else rotations.from_yaw(self.yaw)
+
+    @property
+    def turns_about_z_only(self) -> bool:
+        """Whether the orientation is a yaw (scenes move their objects by such poses only)."""
+        return self.quaternion is None
 
     @property
     def rotation(self) -> np.ndarray:
         """`3 x 3` rotation from the frame to the base frame."""
+        if self.quaternion is not None:
+            return rotations.to_matrix(self.orientation)
         cos, sin = math.cos(self.yaw), math.sin(self.yaw)
         return np.array([[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]])
 
@@ -43,17 +60,32 @@ class Pose:
     def compose(self, other: "Pose") -> "Pose":
         """This transform applied after `other`: the pose `other` takes when the whole world
         is moved by this one."""
-        return Pose(tuple(float(v) for v in self.to_base(np.asarray(other.position)[None])[0]), self.yaw + other.yaw)
+        position = tuple(float(v) for v in self.to_base(np.asarray(other.position)[None])[0])
+        if self.turns_about_z_only and other.turns_about_z_only:
+            return Pose(position, self.yaw + other.yaw)
+        return Pose(position, quaternion=tuple(float(v) for v in rotations.multiply(self.orientation, other.orientation)))
 
     def as_dict(self) -> dict[str, Any]:
+        if self.quaternion is not None:
+            return {"position": [float(v) for v in self.position], "orientation": [float(v) for v in self.quaternion]}
         return {"position": [float(v) for v in self.position], "yaw": float(self.yaw)}
 
 
 def parse_pose(data: Any, path: Path | str, where: str) -> Pose:
-    """A pose from YAML: `{position: [x, y, z], yaw: RAD}` (yaw optional, default 0)."""
-    check_keys(data, ("position", "yaw"), path, where, required=("position",))
+    """A pose from YAML: `{position: [x, y, z], yaw: RAD}` (yaw optional, default 0) or
+    `{position: [x, y, z], orientation: [qx, qy, qz, qw]}` (a unit quaternion, scalar last;
+    normalised when its norm is within 0.001 of 1)."""
+    check_keys(data, ("position", "yaw", "orientation"), path, where, required=("position",))
     position = vector(data["position"], 3, path, f"{where}.position")
-    return Pose(position, number(data.get("yaw", 0.0), path, f"{where}.yaw"))
+    if "orientation" not in data:
+        return Pose(position, number(data.get("yaw", 0.0), path, f"{where}.yaw"))
+    if "yaw" in data:
+        raise ConfigError(f"{path}: '{where}' gives both 'yaw' and 'orientation'; give one")
+    quaternion = np.array(vector(data["orientation"], 4, path, f"{where}.orientation"))
+    norm = float(np.linalg.norm(quaternion))
+    if not abs(norm - 1.0) <= rotations.UNIT_TOLERANCE:
+        raise ConfigError(f"{path}: '{where}.orientation' must be a unit quaternion [qx, qy, qz, qw] (its norm is {norm:.4g})")
+    return Pose(position, quaternion=tuple(float(v) for v in quaternion / norm))
 
 
 def parse_assignment(text: str, option: str, defaults: Mapping[str, Pose] | None = None) -> tuple[str, Pose]:

@@ -17,13 +17,13 @@ import pytest
 from tests.conftest import ROOT
 
 PACKAGE = ROOT / "stl_lfd"
-LEAVES = {"choices", "dag", "errors", "files", "lazy", "limits", "poses", "signals", "yamlfile"}
+LEAVES = {"choices", "dag", "errors", "files", "lazy", "limits", "poses", "rotations", "signals", "yamlfile"}
 # Higher ranks may import lower ones (and themselves); equal ranks only themselves.
 RANKS = {"leaf": 0, "stl": 1, "hsmm": 1, "sim": 1, "skill": 2, "optim": 3, "report": 4, "progress": 5, "cli": 6, "__init__": 7}
 
 
 def layer(module: str) -> str:
-    """`stl_lfd.optim.run` -> `optim`; leaf utilities -> `leaf`."""
+    """`stl_lfd.optim.runs.prepare` -> `optim`; leaf utilities -> `leaf`."""
     parts = module.split(".")
     if len(parts) == 1:
         return "__init__"

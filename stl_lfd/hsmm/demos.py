@@ -3,12 +3,14 @@ the optional frame sidecars that give the poses of the objects each demonstratio
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from stl_lfd.errors import ConfigError, SignalError
 from stl_lfd.poses import BASE_FRAME, Pose, parse_pose
+from stl_lfd.rotations import QUATERNION_COLUMNS, checked_quaternions
 from stl_lfd.signals import SignalTable, read_signal_csv
 from stl_lfd.yamlfile import check_keys, read_yaml
 
@@ -24,7 +26,7 @@ def load_demos(folder: str | Path) -> list[SignalTable]:
     paths = sorted(folder.glob("*.csv"))
     if not paths:
         raise SignalError(f"{folder}: no demonstration CSV files in this folder")
-    demos = [read_signal_csv(path, required=POSITION_COLUMNS) for path in paths]
+    demos = [with_checked_orientation(read_signal_csv(path, required=POSITION_COLUMNS)) for path in paths]
     for demo in demos:
         if demo.samples < 2:
             raise SignalError(f"{demo.source}: a demonstration needs at least 2 samples (found {demo.samples})")
@@ -33,14 +35,32 @@ def load_demos(folder: str | Path) -> list[SignalTable]:
     return demos
 
 
+def with_checked_orientation(demo: SignalTable) -> SignalTable:
+    """`demo` with its orientation columns `qx, qy, qz, qw` (if any) checked, normalised and made
+    continuous (`rotations.checked_quaternions`); all four or none."""
+    present = [name for name in QUATERNION_COLUMNS if name in demo.columns]
+    if not present:
+        return demo
+    if len(present) != 4:
+        missing = [name for name in QUATERNION_COLUMNS if name not in demo.columns]
+        raise SignalError(f"{demo.source}: the orientation needs all of qx, qy, qz, qw (no column {', '.join(missing)})")
+    quaternions = checked_quaternions(np.column_stack([demo.columns[name] for name in QUATERNION_COLUMNS]), demo.source)
+    return replace(demo, columns=dict(demo.columns) | dict(zip(QUATERNION_COLUMNS, quaternions.T)))
+
+
 def median_period(demos: list[SignalTable]) -> float:
     return float(np.median(np.concatenate([np.diff(demo.times) for demo in demos])))
 
 
 def resample(demo: SignalTable, period: float) -> np.ndarray:
-    """`T x D` samples of `demo` every `period` seconds from its first sample (linear interpolation)."""
+    """`T x D` samples of `demo` every `period` seconds from its first sample (linear
+    interpolation; an orientation's quaternions renormalised after it)."""
     times = demo.times[0] + np.arange(int(np.floor(demo.duration / period + 1e-9)) + 1) * period
-    return np.column_stack([np.interp(times, demo.times, values) for values in demo.columns.values()])
+    samples = np.column_stack([np.interp(times, demo.times, values) for values in demo.columns.values()])
+    if all(name in demo.columns for name in QUATERNION_COLUMNS):
+        columns = [list(demo.columns).index(name) for name in QUATERNION_COLUMNS]
+        samples[:, columns] /= np.linalg.norm(samples[:, columns], axis=1, keepdims=True)
+    return samples
 
 
 def sidecar_path(demo: SignalTable | str | Path) -> Path:

@@ -3,7 +3,8 @@
 Version 2 added `frame_names` for task-parameterised models (`TPHSMM`; files without it, all
 version 1 files among them, hold a single-frame `HSMM`) and the demonstrations' end point
 (`end_state`, `end_offsets`, `end_covars`; models from files without it retrieve as before,
-ending at the final state's mean).
+ending at the final state's mean). Version 3 added `orientation_reference` for skills with
+orientation (rotation vectors `rx, ry, rz` relative to it; see `stl_lfd.hsmm.orientation`).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from stl_lfd.hsmm.model import HSMM
 from stl_lfd.hsmm.tp import TPHSMM
 
 FORMAT = "stlopt-hsmm"
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 _ARRAYS = ("means_", "covars_", "duration_means_", "duration_stds_", "transmat_", "startprob_")
 
 
@@ -30,6 +31,8 @@ def save_model(model: HSMM, path: str | Path) -> None:
     end = model.end_target()
     if end is not None:
         frames.update(end_state=end[0], end_offsets=np.asarray(model.end_offsets_), end_covars=end[2])
+    if model.orientation is not None:
+        frames.update(orientation_reference=model.orientation)
     with atomic_output(path) as temporary:
         np.savez(
             temporary,
@@ -75,6 +78,7 @@ def load_model(path: str | Path) -> HSMM:
         setattr(model, name, np.array(fields[name.rstrip("_")], dtype=float))
     model.sample_period_ = float(fields["sample_period"])
     model.signal_names_ = [str(name) for name in fields["signal_names"]]
+    model.orientation_reference_ = np.array(fields["orientation_reference"], dtype=float) if "orientation_reference" in fields else None
     if "end_offsets" in fields:
         model.end_state_ = int(fields["end_state"])
         model.end_offsets_ = np.array(fields["end_offsets"], dtype=float)

@@ -21,7 +21,7 @@ COARSEST_DEFAULT_PERIOD = 0.02
 
 
 def learn_from_folder(
-    folder: str | Path, n_states: int = 6, sample_period: float | None = None, frames: list[str] | None = None
+    folder: str | Path, n_states: int = 6, sample_period: float | None = None, frames: list[str] | None = None, restarts: int = 1
 ) -> tuple[HSMM, list[np.ndarray]]:
     """Load every demonstration CSV of `folder` and its frame sidecar if any, then `learn`.
 
@@ -31,7 +31,7 @@ def learn_from_folder(
     _check_settings(n_states, sample_period)
     demos = load_demos(folder)
     poses = load_demo_frames(demos)
-    return learn(demos, n_states, sample_period, source=str(folder), poses=poses, frames=model_frames(poses, frames, str(folder)))
+    return learn(demos, n_states, sample_period, source=str(folder), poses=poses, frames=model_frames(poses, frames, str(folder)), restarts=restarts)
 
 
 def model_frames(poses: list[dict[str, Pose]] | None, chosen: list[str] | None, source: str) -> list[str] | None:
@@ -54,8 +54,10 @@ def learn(
     source: str = "demonstrations",
     poses: list[dict[str, Pose]] | None = None,
     frames: list[str] | None = None,
+    restarts: int = 1,
 ) -> tuple[HSMM, list[np.ndarray]]:
-    """Resample the demonstrations (signal tables with the same columns) to one period and fit.
+    """Resample the demonstrations (signal tables with the same columns) to one period and fit
+    (`restarts` EM starts, the most likely kept: `HSMM.n_init`).
 
     The default period is the demonstrations' median period, but not finer than
     `COARSEST_DEFAULT_PERIOD` (50 Hz). With `frames`, the model is a `TPHSMM` learned in those
@@ -80,9 +82,9 @@ def learn(
         )
     lengths = np.array([len(s) for s in sequences])
     if frames is None:
-        return HSMM(n_states=n_states).fit(np.concatenate(sequences), lengths, period, list(demos[0].columns)), sequences
+        return HSMM(n_states=n_states, n_init=restarts).fit(np.concatenate(sequences), lengths, period, list(demos[0].columns)), sequences
     poses = poses if poses is not None else [{} for _ in demos]
-    model = TPHSMM(n_states=n_states)
+    model = TPHSMM(n_states=n_states, n_init=restarts)
     try:
         model.fit(np.concatenate(sequences), lengths, period, list(demos[0].columns), poses, frames)
     except ModelError as error:

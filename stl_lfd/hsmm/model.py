@@ -12,8 +12,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import stl_lfd.rotations as rotations
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm._forward import duration_pmf, hmm_posteriors, state_occupancy
+from stl_lfd.hsmm.orientation import Coordinates, to_model_columns
 
 logger = logging.getLogger(__name__)
 
@@ -54,7 +56,10 @@ class HSMM:
             state. Rows are normalised where they are used, so any non-negative values work.
         startprob_: `K` initial distribution.
         sample_period_: seconds between samples of the data the model was fitted on.
-        signal_names_: the D signal names.
+        signal_names_: the D signal names (the model's columns: with orientation, `rx, ry, rz`
+            in place of the demonstrations' `qx, qy, qz, qw`).
+        orientation_reference_: for a skill with orientation, the quaternion its rotation
+            vectors are relative to (see `stl_lfd.hsmm.orientation`); None for positions only.
         end_state_, end_offsets_, end_covars_: where the demonstrations end: the final state
             of the nominal path, the `D` offset of the mean end point from that state's mean,
             and the `D x D` covariance of the end points. Retrieval tracks this end for the
@@ -63,11 +68,12 @@ class HSMM:
             that may still be moving). None in models from older files.
     """
 
-    def __init__(self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-2, reg_covar: float = 1e-6) -> None:
+    def __init__(self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-2, reg_covar: float = 1e-6, n_init: int = 1) -> None:
         self.n_states = n_states
         self.n_iter = n_iter
         self.tol = tol
         self.reg_covar = reg_covar
+        self.n_init = n_init
 
     # --- learning -------------------------------------------------------------------------
 
@@ -78,19 +84,48 @@ class HSMM:
             X: `N x D` samples of all demonstrations, concatenated.
             lengths: samples per demonstration (sums to N).
             sample_period: seconds between samples (all demonstrations share it).
-            signal_names: names of the D columns.
+            signal_names: names of the D columns; `qx, qy, qz, qw` (a unit quaternion per
+                sample, continuous) make it a skill with orientation.
 
         Recipe: k-bins initialisation, left-right HMM Baum-Welch with covariance
         regularisation, self-transitions removed, then a Gaussian duration per state from the
-        segment lengths of the most likely state at each sample.
+        segment lengths of the most likely state at each sample. With `n_init` above 1, EM
+        also starts from `n_init - 1` other segmentations (each demonstration cut into K
+        random-length bins, seeded) and the start of highest likelihood is kept.
         """
         X = np.asarray(X, dtype=float)
         lengths = np.asarray(lengths, dtype=int)
         self._check_data(X, lengths)
+        names = list(signal_names) if signal_names is not None else [f"s{i}" for i in range(X.shape[1])]
+        X, self.signal_names_, self.orientation_reference_ = to_model_columns(X, names)
         self.sample_period_ = float(sample_period)
-        self.signal_names_ = list(signal_names) if signal_names is not None else [f"s{i}" for i in range(X.shape[1])]
         sequences = np.split(X, np.cumsum(lengths)[:-1])
-        self._init_kbins(sequences)
+        best = None
+        for start in range(max(self.n_init, 1)):
+            self._init_kbins(sequences, None if start == 0 else np.random.default_rng(start))
+            try:
+                gamma = self._em(sequences, lengths)
+            except (ValueError, np.linalg.LinAlgError, ModelError):
+                if start == 0:
+                    raise
+                continue  # a random start that degenerated (a state left without samples)
+            if best is None or self.monitor_.history[-1] > best[0]:  # NaN never wins
+                best = (self.monitor_.history[-1], self._learned(), gamma)
+        _, learned, gamma = best
+        for name, value in learned.items():
+            setattr(self, name, value)
+        self._fit_durations(gamma, lengths)
+        self._fit_end(np.array([sequence[-1] for sequence in sequences]))
+        self._check()
+        return self
+
+    def _learned(self) -> dict:
+        """The EM's results so far (to keep the best of several starts)."""
+        return {name: getattr(self, name) for name in ("means_", "covars_", "startprob_", "transmat_", "monitor_")}
+
+    def _em(self, sequences: list[np.ndarray], lengths: np.ndarray) -> np.ndarray:
+        """Baum-Welch from the current means and covariances: sets the parameters and
+        `monitor_`, returns the last posteriors (`B x T x K`)."""
         padded = _pad(sequences)
         self.monitor_ = ConvergenceMonitor(self.tol, self.n_iter)
         transmat = self._left_right_start(lengths)
@@ -103,10 +138,7 @@ class HSMM:
             if self.monitor_.converged:
                 break
         self._set_transitions(transmat)
-        self._fit_durations(gamma, lengths)
-        self._fit_end(np.array([sequence[-1] for sequence in sequences]))
-        self._check()
-        return self
+        return gamma
 
     def predict(self, X: np.ndarray, lengths: np.ndarray | None = None) -> np.ndarray:
         """Most likely state at each sample (HMM posteriors with self-transitions restored
@@ -187,7 +219,11 @@ class HSMM:
             t += length
             if transmat[state].sum() > 0:
                 state = rng.choice(self.n_states, p=transmat[state])
-        X = np.array([rng.multivariate_normal(self.means_[k], self.covars_[k]) for k in states])
+        coordinates = self._coordinates()
+        if coordinates.rotation is None:
+            X = np.array([rng.multivariate_normal(self.means_[k], self.covars_[k]) for k in states])
+        else:
+            X = np.array([coordinates.shifted(self.means_[k], rng.multivariate_normal(np.zeros(self.n_features), self.covars_[k])) for k in states])
         return X, states
 
     # --- parameters ------------------------------------------------------------------------
@@ -225,8 +261,24 @@ class HSMM:
             raise ModelError(f"end_state_, end_offsets_ and end_covars_ must be a state, ({D},) and ({D}, {D})")
         if end is not None and not (np.all(np.isfinite(end[1])) and np.all(np.isfinite(end[2]))):
             raise ModelError("the end point contains NaN or infinity")
+        rotation = self._coordinates().rotation
+        if rotation is not None and not (np.shape(self.orientation) == (4,) and np.isclose(np.linalg.norm(self.orientation), 1.0)):
+            raise ModelError("a model with orientation (rx, ry, rz) needs orientation_reference_, a unit quaternion")
         if not np.isclose(np.sum(self.startprob_), 1.0):
             raise ModelError(f"startprob_ must sum to 1 (got {np.sum(self.startprob_):.6g})")
+
+    @property
+    def orientation(self) -> np.ndarray | None:
+        """The quaternion the model's rotation vectors are relative to; None for positions only
+        (and for models from files written before skills had orientation)."""
+        return getattr(self, "orientation_reference_", None)
+
+    def orientations(self, points: np.ndarray) -> np.ndarray | None:
+        """`... x 4` quaternions of `... x D` points in the model's columns (None without orientation)."""
+        rotation = self._coordinates().rotation
+        if rotation is None:
+            return None
+        return rotations.exp_map(self.orientation, np.asarray(points)[..., rotation])
 
     @property
     def n_features(self) -> int:
@@ -262,15 +314,29 @@ class HSMM:
                 f"K = {self.n_states} states need demonstrations of at least {self.n_states} samples (the shortest has {shortest}); use a smaller K"
             )
 
-    def _init_kbins(self, sequences: list[np.ndarray]) -> None:
-        """k-bins: cut every demonstration into K equal time bins; state k starts as bin k."""
+    def _init_kbins(self, sequences: list[np.ndarray], rng: np.random.Generator | None = None) -> None:
+        """k-bins: cut every demonstration into K equal time bins (with `rng`, K bins of random
+        lengths); state k starts as bin k."""
         K, D = self.n_states, sequences[0].shape[1]
-        bins = [np.array_split(sequence, K) for sequence in sequences]
+        if rng is None:
+            bins = [np.array_split(sequence, K) for sequence in sequences]
+        else:
+            bins = [np.split(sequence, np.sort(rng.choice(np.arange(1, len(sequence)), K - 1, replace=False))) for sequence in sequences]
         pooled = [np.concatenate([b[k] for b in bins]) for k in range(K)]
-        self.means_ = np.array([samples.mean(axis=0) for samples in pooled])
-        covars = [np.atleast_2d(np.cov(samples.T, bias=True)) if len(samples) > 1 else np.zeros((D, D)) for samples in pooled]
+        coordinates = self._coordinates()
+        if coordinates.rotation is None:
+            self.means_ = np.array([samples.mean(axis=0) for samples in pooled])
+            covars = [np.atleast_2d(np.cov(samples.T, bias=True)) if len(samples) > 1 else np.zeros((D, D)) for samples in pooled]
+        else:
+            self.means_ = np.array([coordinates.mean(samples, np.ones(len(samples))) for samples in pooled])
+            deviations = [coordinates.deviations(samples, mean) for samples, mean in zip(pooled, self.means_)]
+            covars = [deviation.T @ deviation / len(deviation) for deviation in deviations]
         self.covars_ = self._constrained(np.array(covars)) + self.reg_covar * np.eye(D)
         self.startprob_ = np.eye(K)[0]
+
+    def _coordinates(self) -> Coordinates:
+        """Where the model's columns hold an orientation (see `stl_lfd.hsmm.orientation`)."""
+        return Coordinates.of(list(self.signal_names_))
 
     def _constrained(self, covars: np.ndarray) -> np.ndarray:
         """The covariances EM may use (all of them here; block-diagonal in `TPHSMM`)."""
@@ -286,7 +352,12 @@ class HSMM:
     def _frame_likelihood(self, padded: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """`B x T x K` Gaussian likelihoods divided by their largest value per frame, and the
         `B x T` logs of those divisors (which the log-likelihood adds back)."""
-        log_likelihood = np.stack([gaussian_log_density(padded, self.means_[k], self.covars_[k]) for k in range(self.n_states)], axis=-1)
+        coordinates = self._coordinates()
+        if coordinates.rotation is None:
+            log_likelihood = np.stack([gaussian_log_density(padded, self.means_[k], self.covars_[k]) for k in range(self.n_states)], axis=-1)
+        else:
+            deviations = [coordinates.deviations(padded, self.means_[k]) for k in range(self.n_states)]
+            log_likelihood = np.stack([gaussian_log_density(deviations[k], 0.0, self.covars_[k]) for k in range(self.n_states)], axis=-1)
         log_scale = log_likelihood.max(axis=-1)
         # Floor: a frame that no reachable state explains must not zero the forward pass.
         return np.exp(np.maximum(log_likelihood - log_scale[..., None], -300.0)), log_scale
@@ -295,8 +366,14 @@ class HSMM:
         D = padded.shape[-1]
         weights = gamma.sum(axis=(0, 1))  # K
         safe = np.maximum(weights, 1e-12)
-        self.means_ = np.einsum("btk,btd->kd", gamma, padded) / safe[:, None]
-        centred = padded[:, :, None, :] - self.means_[None, None]  # B x T x K x D
+        coordinates = self._coordinates()
+        if coordinates.rotation is None:
+            self.means_ = np.einsum("btk,btd->kd", gamma, padded) / safe[:, None]
+            centred = padded[:, :, None, :] - self.means_[None, None]  # B x T x K x D
+        else:
+            points, weights = padded.reshape(-1, D), gamma.reshape(-1, self.n_states)
+            self.means_ = np.array([coordinates.mean(points, weights[:, k], self.means_[k]) for k in range(self.n_states)])
+            centred = np.stack([coordinates.deviations(padded, self.means_[k]) for k in range(self.n_states)], axis=2)
         self.covars_ = self._constrained(np.einsum("btk,btkd,btke->kde", gamma, centred, centred) / safe[:, None, None])
         self.covars_ += self.reg_covar * np.eye(D)
         transmat = xi_sum / np.maximum(xi_sum.sum(axis=1, keepdims=True), 1e-300)
@@ -333,8 +410,15 @@ class HSMM:
         state of the nominal path as an offset from its mean, so that moving that state's
         mean moves the end with it."""
         self.end_state_ = self.nominal_path()[-1]
-        self.end_offsets_ = ends.mean(axis=0) - self.means_[self.end_state_]
-        spread = np.atleast_2d(np.cov(ends.T, bias=True)) if len(ends) > 1 else np.zeros((ends.shape[1],) * 2)
+        coordinates = self._coordinates()
+        if coordinates.rotation is None:
+            self.end_offsets_ = ends.mean(axis=0) - self.means_[self.end_state_]
+            spread = np.atleast_2d(np.cov(ends.T, bias=True)) if len(ends) > 1 else np.zeros((ends.shape[1],) * 2)
+        else:
+            end = coordinates.mean(ends, np.ones(len(ends)), ends[0])
+            self.end_offsets_ = coordinates.deviations(end, self.means_[self.end_state_])
+            deviations = coordinates.deviations(ends, end)
+            spread = deviations.T @ deviations / len(ends)
         self.end_covars_ = self._constrained(spread) + self.reg_covar * np.eye(ends.shape[1])
 
     def end_target(self) -> tuple[int, np.ndarray, np.ndarray] | None:
@@ -343,7 +427,7 @@ class HSMM:
         if getattr(self, "end_offsets_", None) is None:
             return None
         state = int(self.end_state_)
-        return state, np.asarray(self.means_)[state] + self.end_offsets_, np.asarray(self.end_covars_)
+        return state, self._coordinates().shifted(np.asarray(self.means_)[state], np.asarray(self.end_offsets_)), np.asarray(self.end_covars_)
 
     def _hmm_transmat(self) -> np.ndarray:
         """Equivalent HMM transition matrix: self-transition 1 - 1/duration mean (steps)."""

@@ -35,6 +35,8 @@ class Trajectory:
         velocities: `T x D`.
         states: `T` HSMM state followed at each sample.
         signal_names: the D names.
+        orientations: `T x 4` quaternions (x, y, z, w) of a skill with orientation (its
+            `rx, ry, rz` columns, relative to the model's reference); None without.
     """
 
     times: np.ndarray
@@ -42,6 +44,7 @@ class Trajectory:
     velocities: np.ndarray
     states: np.ndarray
     signal_names: list[str]
+    orientations: np.ndarray | None = None
 
 
 def retrieve(
@@ -61,7 +64,11 @@ def retrieve(
         poses: for a TP-HSMM, the pose of every frame but `base` (see `TPHSMM.at`).
 
     Returns:
-        The trajectory (base frame), starting at rest at the mean of the first state.
+        The trajectory (base frame), starting at rest at the mean of the first state. A skill
+        with orientation is tracked in the tangent space of its reference orientation (each
+        state's covariance transported there) and mapped back to quaternions, so the
+        orientation is continuous and reaches each state's mean orientation as the position
+        reaches its mean (Calinon, IEEE RAM 2020).
     """
     if isinstance(model, TPHSMM):
         model = model.at(poses or {})
@@ -86,8 +93,11 @@ def retrieve(
     times = np.arange(steps) * dt
     positions, velocities = trajectory[:, :dimension], trajectory[:, dimension:]
     if rate is not None and not np.isclose(rate * dt, 1.0):
-        return _resample(times, positions, velocities, states, rate, duration, model.signal_names_)
-    return Trajectory(times, positions, velocities, states, list(model.signal_names_))
+        trajectory = _resample(times, positions, velocities, states, rate, duration, model.signal_names_)
+    else:
+        trajectory = Trajectory(times, positions, velocities, states, list(model.signal_names_))
+    trajectory.orientations = model.orientations(trajectory.positions)
+    return trajectory
 
 
 def _tracked(model: HSMM, states: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -95,14 +105,16 @@ def _tracked(model: HSMM, states: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
     followed at each step: the states' own, and in the second half of the final state (from
     half its duration mean on), the demonstrations' end point when the model knows it."""
     end = model.end_target()
+    at_reference = model._coordinates().at_reference
     if end is None or states[-1] != end[0]:
-        return np.asarray(model.means_), np.asarray(model.covars_), states
+        return np.asarray(model.means_), at_reference(model.means_, model.covars_), states
     before = np.flatnonzero(states != end[0])
     final_run = before[-1] + 1 if before.size else 0  # where the final state's run starts
     switch = final_run + max(1, int(round(model.duration_means_[end[0]] / model.sample_period_ / 2)))
     segments = states.copy()
     segments[switch:] = model.n_states
-    return np.vstack([model.means_, end[1]]), np.concatenate([model.covars_, end[2][None]]), segments
+    means = np.vstack([model.means_, end[1]])
+    return means, at_reference(means, np.concatenate([model.covars_, end[2][None]])), segments
 
 
 def _resample(

@@ -19,6 +19,7 @@ import numpy as np
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm.model import HSMM
 from stl_lfd.poses import BASE_FRAME, Pose
+from stl_lfd.rotations import QUATERNION_COLUMNS
 
 POSITION_SIGNALS = ("x", "y", "z")
 
@@ -54,6 +55,8 @@ class TPHSMM(HSMM):
         """
         signal_names = list(signal_names)
         _check_positions(signal_names)
+        if set(QUATERNION_COLUMNS) & set(signal_names):
+            raise ModelError("skills with frames follow positions only for now: leave out the qx, qy, qz, qw columns, or learn without frame sidecars")
         if not frame_names or len(set(frame_names)) != len(frame_names):
             raise ModelError(f"frames must be distinct names (got {', '.join(frame_names) or 'none'})")
         lengths = np.asarray(lengths, dtype=int)
@@ -91,7 +94,7 @@ class TPHSMM(HSMM):
             model.end_covars_ = base_covars[-1]
         for name in ("duration_means_", "duration_stds_", "transmat_", "startprob_"):
             setattr(model, name, np.array(getattr(self, name), dtype=float))
-        model.sample_period_, model.signal_names_ = self.sample_period_, list(names)
+        model.sample_period_, model.signal_names_, model.orientation_reference_ = self.sample_period_, list(names), None
         return model
 
     @property

@@ -11,6 +11,8 @@ from typing import Callable
 
 import numpy as np
 
+import stl_lfd.rotations as rotations
+from stl_lfd.rotations import QUATERNION_COLUMNS
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.reference import Reference, Rollout, recording_times
 from stl_lfd.sim.scene import Scene
@@ -30,6 +32,9 @@ class KinematicBackend:
             "gripper": reference.gripper_at(times, scene.gripper_opening),
             "force": np.zeros(times.size),
         }
+        orientations = reference.orientations_at(times)
+        columns.update(zip(QUATERNION_COLUMNS, orientations.T))
+        columns["tilt"] = rotations.tilt(orientations)
         for frame in scene.frames:
             for value, name in zip(frame.pose.position, frame.signals):
                 columns[name] = np.full(times.size, float(value))

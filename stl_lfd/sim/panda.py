@@ -1,9 +1,10 @@
 """The PyBullet backend: a Franka Panda tracking the reference with inverse kinematics.
 
 Every simulation step (240 Hz) computes the inverse kinematics of the grasp-target link (link
-11 of `franka_panda/panda.urdf`) for the next reference position with the gripper pointing
-down, and sends the joint targets to the arm's position controllers. The recording is taken at
-every step and resampled to the requested rate at the end.
+11 of `franka_panda/panda.urdf`) for the next reference pose (the reference's orientation, or
+the gripper pointing down), and sends the joint targets to the arm's position controllers.
+The recording (position, orientation, tilt, gripper, force, object frames) is taken at every
+step and resampled to the requested rate at the end.
 
 A world is built once per scene and process (about 0.2 s) and restored to its saved initial
 state before each rollout, so the same reference always gives bit-identical signals; scenes
@@ -24,7 +25,9 @@ from typing import Callable, Iterator
 
 import numpy as np
 
+import stl_lfd.rotations as rotations
 from stl_lfd.errors import ExecutionError
+from stl_lfd.rotations import QUATERNION_COLUMNS
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.reference import TIME_STEP, Reference, Rollout, recording_times
 from stl_lfd.sim.scene import Camera, Region, Scene, SceneFrame, SceneObject
@@ -34,7 +37,7 @@ ARM_JOINTS = list(range(7))
 FINGER_JOINTS = [9, 10]
 # Elbow up, hand above the table: the posture the inverse kinematics starts from.
 REST_POSE = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785, 0.04, 0.04]
-GRIPPER_DOWN = (1.0, 0.0, 0.0, 0.0)
+GRIPPER_DOWN = tuple(rotations.DOWN)  # the IK target of skills without orientation
 GRASP_FORCE = 2000.0  # N: the grasp constraint is stiff enough not to slip under contact  # quaternion (x, y, z, w): rotation by pi about x
 
 Observer = Callable[[float, "PandaWorld"], None]
@@ -164,13 +167,14 @@ class PandaWorld:
         visual = self.client.createVisualShape(self.pb.GEOM_BOX, halfExtents=list((upper - lower) / 2), rgbaColor=region.color)
         return self.client.createMultiBody(baseMass=0, baseCollisionShapeIndex=-1, baseVisualShapeIndex=visual, basePosition=list((upper + lower) / 2))
 
-    def reset(self, position: np.ndarray, opening: float) -> None:
-        """Restore the initial state, then place the hand at `position` at rest."""
+    def reset(self, position: np.ndarray, opening: float, orientation=GRIPPER_DOWN) -> None:
+        """Restore the initial state, then place the hand at `position` (and `orientation`, a
+        quaternion x, y, z, w) at rest."""
         client = self.client
         self.release()
         client.restoreState(self.initial_state)
         for _ in range(20):
-            angles = self._inverse_kinematics(position, iterations=100)
+            angles = self._inverse_kinematics(position, iterations=100, orientation=orientation)
             for joint, angle in zip(ARM_JOINTS, angles):
                 client.resetJointState(self.robot, joint, angle)
             if np.linalg.norm(self.end_effector() - position) < 1e-6:
@@ -182,14 +186,15 @@ class PandaWorld:
         # force spike. Collision detection at the reset pose replaces them.
         client.performCollisionDetection()
 
-    def command(self, position: np.ndarray, opening: float) -> None:
-        """Send joint targets that bring the hand to `position` and the fingers to `opening`."""
+    def command(self, position: np.ndarray, opening: float, orientation=GRIPPER_DOWN) -> None:
+        """Send joint targets that bring the hand to `position` (and `orientation`) and the
+        fingers to `opening`."""
         control = self.scene.control
         self.client.setJointMotorControlArray(
             self.robot,
             ARM_JOINTS,
             self.pb.POSITION_CONTROL,
-            targetPositions=self._inverse_kinematics(position),
+            targetPositions=self._inverse_kinematics(position, orientation=orientation),
             forces=control.arm_forces,
             positionGains=[control.position_gain] * len(ARM_JOINTS),
         )
@@ -237,15 +242,20 @@ class PandaWorld:
             self.client.removeConstraint(self.held[1])
             self.held = None
 
-    def _inverse_kinematics(self, position: np.ndarray, iterations: int = 20) -> list[float]:
+    def _inverse_kinematics(self, position: np.ndarray, iterations: int = 20, orientation=GRIPPER_DOWN) -> list[float]:
         angles = self.client.calculateInverseKinematics(
-            self.robot, END_EFFECTOR_LINK, list(position), GRIPPER_DOWN, maxNumIterations=iterations, residualThreshold=1e-5
+            self.robot, END_EFFECTOR_LINK, list(position), list(orientation), maxNumIterations=iterations, residualThreshold=1e-5
         )
         return list(angles[: len(ARM_JOINTS)])
 
     def end_effector(self) -> np.ndarray:
         """Position (m) of the grasp-target link frame."""
-        return np.array(self.client.getLinkState(self.robot, END_EFFECTOR_LINK, computeForwardKinematics=1)[4])
+        return self.end_effector_pose()[0]
+
+    def end_effector_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Position (m) and orientation (quaternion x, y, z, w) of the grasp-target link frame."""
+        state = self.client.getLinkState(self.robot, END_EFFECTOR_LINK, computeForwardKinematics=1)
+        return np.array(state[4]), np.array(state[5])
 
     def gripper_opening(self) -> float:
         first, second = self.client.getJointStates(self.robot, FINGER_JOINTS)
@@ -298,7 +308,8 @@ class PyBulletBackend:
         return self._worlds[scene]
 
     def run(self, reference: Reference, scene: Scene, rate: float, observer: Observer | None = None) -> Rollout:
-        """Execute `reference` and record `t, x, y, z, gripper, force` at `rate` samples/s.
+        """Execute `reference` and record `t, x, y, z, gripper, force, qx, qy, qz, qw, tilt` (and
+        the object frames' positions) at `rate` samples/s.
 
         `observer(time, world)` is called after the reset and after every simulation step
         (for videos and for pacing the GUI).
@@ -311,14 +322,16 @@ class PyBulletBackend:
         steps = int(round(reference.duration / TIME_STEP))
         step_times = np.arange(steps + 1) * TIME_STEP
         targets = reference.positions_at(step_times)
+        turns = [GRIPPER_DOWN] * (steps + 1) if reference.orientations is None else reference.orientations_at(step_times)
         openings = reference.gripper_at(step_times, scene.gripper_opening)
         positions = np.empty((steps + 1, 3))
+        orientations = np.empty((steps + 1, 4))
         fingers = np.empty(steps + 1)
         forces = np.empty(steps + 1)
         frames = np.empty((steps + 1, len(scene.frames), 3))
-        world.reset(targets[0], openings[0])
+        world.reset(targets[0], openings[0], turns[0])
         events = list(reference.events)
-        positions[0], fingers[0], forces[0] = world.end_effector(), world.gripper_opening(), world.contact_force()
+        (positions[0], orientations[0]), fingers[0], forces[0] = world.end_effector_pose(), world.gripper_opening(), world.contact_force()
         frames[0] = world.frame_positions()
         if observer is not None:
             observer(0.0, world)
@@ -326,16 +339,16 @@ class PyBulletBackend:
             while events and events[0][0] <= step_times[step] + 1e-9:
                 time, action = events.pop(0)
                 world.grasp(time) if action == "grasp" else world.release()
-            world.command(targets[step], openings[step])
+            world.command(targets[step], openings[step], turns[step])
             world.step()
-            positions[step], fingers[step], forces[step] = world.end_effector(), world.gripper_opening(), world.contact_force()
+            (positions[step], orientations[step]), fingers[step], forces[step] = world.end_effector_pose(), world.gripper_opening(), world.contact_force()
             frames[step] = world.frame_positions()
             if observer is not None:
                 observer(step_times[step], world)
         if not np.isfinite(positions).all():
             raise ExecutionError("rollout: the simulation diverged (non-finite end-effector positions)")
         forces = low_pass(forces, scene.force_filter_hz, TIME_STEP)
-        return _record(step_times, positions, fingers, forces, frames, scene, reference, rate)
+        return _record(step_times, positions, rotations.continuous(orientations), fingers, forces, frames, scene, reference, rate)
 
     def close(self) -> None:
         for world in self._worlds.values():
@@ -379,7 +392,7 @@ def low_pass(values: np.ndarray, cutoff_hz: float, period: float) -> np.ndarray:
     return filtered
 
 
-def _record(step_times, positions, fingers, forces, frames, scene: Scene, reference: Reference, rate: float) -> Rollout:
+def _record(step_times, positions, orientations, fingers, forces, frames, scene: Scene, reference: Reference, rate: float) -> Rollout:
     times = recording_times(reference.duration, rate)
     times = times[times <= step_times[-1] + 1e-9]
     recorded = np.column_stack([np.interp(times, step_times, positions[:, axis]) for axis in range(3)])
@@ -390,6 +403,10 @@ def _record(step_times, positions, fingers, forces, frames, scene: Scene, refere
         "gripper": np.interp(times, step_times, fingers),
         "force": np.interp(times, step_times, forces),
     }
+    turned = np.column_stack([np.interp(times, step_times, orientations[:, axis]) for axis in range(4)])
+    turned /= np.linalg.norm(turned, axis=1, keepdims=True)
+    columns.update(zip(QUATERNION_COLUMNS, turned.T))
+    columns["tilt"] = rotations.tilt(turned)
     for index, frame in enumerate(scene.frames):
         for axis, name in enumerate(frame.signals):
             columns[name] = np.interp(times, step_times, frames[:, index, axis])

@@ -1,11 +1,14 @@
 """What a backend executes (`Reference`) and what it returns (`Rollout`), and the reference CSV
 that carries a reference to an executor outside stlopt.
 
-Reference CSV: a header `t,x,y,z,gripper,skill,state,event` and one row per sample at the
-simulation rate (240 Hz): time (s, from 0), grasp-target position (m, robot base frame),
-finger opening (m), the skill (or action) the sample belongs to, its HSMM state (1-based, 0
-during an action), and `grasp` or `release` on the sample where that action starts (empty
-otherwise). Numbers are written so that they read back exactly.
+Reference CSV: a header `t,x,y,z,gripper,skill,state,event,qx,qy,qz,qw` and one row per
+sample at the simulation rate (240 Hz): time (s, from 0), grasp-target position (m, robot base
+frame), finger opening (m), the skill (or action) the sample belongs to, its HSMM state
+(1-based, 0 during an action), `grasp` or `release` on the sample where that action starts
+(empty otherwise), and the hand's orientation (a unit quaternion in the base frame, scalar
+last; straight down for skills without orientation). The orientation comes last, so that
+executors that read the first eight columns keep working. Numbers are written so that they
+read back exactly.
 """
 
 from __future__ import annotations
@@ -18,8 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
+import stl_lfd.rotations as rotations
 from stl_lfd.errors import ExecutionError, SignalError
 from stl_lfd.files import UnreadableFile, read_text, write_atomically
+from stl_lfd.rotations import QUATERNION_COLUMNS
 from stl_lfd.signals import SignalTable
 
 # The rate at which references are given and the simulator steps: PyBullet's default 240 Hz.
@@ -45,6 +50,8 @@ class Reference:
             hand) or `release` (let it go).
         skills: `T` names of the skill (or action) each sample belongs to, or None.
         states: `T` HSMM states (1-based; 0 during an action) followed at each sample, or None.
+        orientations: `T x 4` hand orientations (unit quaternions x, y, z, w, base frame), or
+            None for the hand pointing straight down (`rotations.DOWN`).
     """
 
     times: np.ndarray
@@ -53,6 +60,7 @@ class Reference:
     events: tuple[tuple[float, str], ...] = ()
     skills: np.ndarray | None = None
     states: np.ndarray | None = None
+    orientations: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.times = np.asarray(self.times, dtype=float)
@@ -69,6 +77,16 @@ class Reference:
         _require_finite("x, y, z", self.positions, self.times)
         if self.gripper is not None:
             _require_finite("gripper", self.gripper[:, None], self.times)
+        if self.orientations is not None:
+            self.orientations = np.asarray(self.orientations, dtype=float)
+            if self.orientations.shape != (self.times.size, 4):
+                raise ExecutionError(f"reference: orientations must be {self.times.size} x 4 quaternions")
+            _require_finite("qx, qy, qz, qw", self.orientations, self.times)
+            norms = np.linalg.norm(self.orientations, axis=1)
+            if np.any(np.abs(norms - 1.0) > rotations.UNIT_TOLERANCE):
+                index = int(np.argmax(np.abs(norms - 1.0)))
+                raise ExecutionError(f"reference: qx, qy, qz, qw is not a unit quaternion at sample {index + 1} (norm {norms[index]:.4g})")
+            self.orientations = rotations.continuous(self.orientations / norms[:, None])
         for name in ("skills", "states"):
             labels = getattr(self, name)
             if labels is not None and np.shape(labels) != self.times.shape:
@@ -89,6 +107,14 @@ class Reference:
     def positions_at(self, times: np.ndarray) -> np.ndarray:
         """`len(times) x 3` positions by linear interpolation (held at the ends)."""
         return np.column_stack([np.interp(times, self.times, self.positions[:, axis]) for axis in range(3)])
+
+    def orientations_at(self, times: np.ndarray) -> np.ndarray:
+        """`len(times) x 4` orientations, interpolated between samples (held at the ends);
+        straight down everywhere for a reference without orientations."""
+        if self.orientations is None:
+            return np.tile(rotations.DOWN, (len(times), 1))
+        interpolated = np.column_stack([np.interp(times, self.times, self.orientations[:, axis]) for axis in range(4)])
+        return interpolated / np.linalg.norm(interpolated, axis=1, keepdims=True)
 
     def gripper_at(self, times: np.ndarray, default: float) -> np.ndarray:
         """Commanded openings at `times`, or `default` everywhere without gripper commands."""
@@ -148,7 +174,7 @@ def warn_if_untracked(rollout: Rollout, reference: Reference, tolerance: float) 
     )
 
 
-REFERENCE_COLUMNS = ("t", "x", "y", "z", "gripper", "skill", "state", "event")
+REFERENCE_COLUMNS = ("t", "x", "y", "z", "gripper", "skill", "state", "event") + QUATERNION_COLUMNS
 
 
 def write_reference_csv(reference: Reference, path: Path, open_width: float) -> None:
@@ -157,13 +183,15 @@ def write_reference_csv(reference: Reference, path: Path, open_width: float) -> 
     gripper = reference.gripper_at(reference.times, open_width)
     skills = reference.skills if reference.skills is not None else np.full(reference.times.shape, "")
     states = reference.states if reference.states is not None else np.zeros(reference.times.shape, dtype=int)
+    orientations = reference.orientations_at(reference.times) if reference.orientations is None else reference.orientations
     events = dict(reference.events)
     starts = {int(np.argmin(np.abs(reference.times - time))): action for time, action in events.items()}
     body = io.StringIO()
     body.write(",".join(REFERENCE_COLUMNS) + "\n")
     for index, time in enumerate(reference.times.tolist()):
         x, y, z = reference.positions[index].tolist()
-        body.write(f"{time!r},{x!r},{y!r},{z!r},{float(gripper[index])!r},{skills[index]},{int(states[index])},{starts.get(index, '')}\n")
+        quaternion = ",".join(repr(value) for value in orientations[index].tolist())
+        body.write(f"{time!r},{x!r},{y!r},{z!r},{float(gripper[index])!r},{skills[index]},{int(states[index])},{starts.get(index, '')},{quaternion}\n")
     write_atomically(Path(path), body.getvalue())
 
 
@@ -183,13 +211,16 @@ def read_reference_csv(path: str | Path) -> Reference:
         raise SignalError(f"{shown}:1: not a reference CSV (expected the header {','.join(REFERENCE_COLUMNS)})")
     header = [name.strip() for name in rows[0]]
     index = {name: header.index(name) for name in REFERENCE_COLUMNS if name in header}
-    numbers, skills, states, events = [], [], [], []
+    numbers, skills, states, events, quaternions = [], [], [], [], []
+    oriented = all(name in index for name in QUATERNION_COLUMNS)
     for line, row in enumerate(rows[1:], start=2):
         if len(row) != len(header):
             raise SignalError(f"{shown}:{line}: expected {len(header)} values, found {len(row)}")
         try:
             numbers.append([float(row[index[name]]) for name in ("t", "x", "y", "z", "gripper") if name in index])
             states.append(int(row[index["state"]]) if "state" in index else 0)
+            if oriented:
+                quaternions.append([float(row[index[name]]) for name in QUATERNION_COLUMNS])
         except ValueError:
             raise SignalError(f"{shown}:{line}: not a number where one is expected") from None
         skills.append(row[index["skill"]] if "skill" in index else "")
@@ -199,6 +230,10 @@ def read_reference_csv(path: str | Path) -> Reference:
         raise SignalError(f"{shown}: a reference needs at least two samples")
     data = np.array(numbers)
     try:
-        return Reference(data[:, 0], data[:, 1:4], data[:, 4] if "gripper" in index else None, tuple(events), np.array(skills), np.array(states))
+        orientations = np.array(quaternions) if oriented else None
+        if orientations is not None and np.allclose(orientations, rotations.DOWN, rtol=0, atol=1e-12):
+            orientations = None  # straight down throughout: a skill without orientation
+        gripper = data[:, 4] if "gripper" in index else None
+        return Reference(data[:, 0], data[:, 1:4], gripper, tuple(events), np.array(skills), np.array(states), orientations)
     except ExecutionError as error:
         raise SignalError(f"{shown}: {str(error).removeprefix('reference: ')}") from None

@@ -1,5 +1,6 @@
 """The safety gate: a reference must stay inside the scene's workspace box and below its maximum
-Cartesian speed before it is handed to anything outside stlopt (an external command, or a
+Cartesian speed (and, if the scene sets one, its maximum angular speed of the hand) before it is
+handed to anything outside stlopt (an external command, or a
 trial asked for with `stlopt ask`).
 
 The in-process backends are not gated: a simulated robot cannot be hurt, and the optimiser
@@ -12,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import stl_lfd.rotations as rotations
 from stl_lfd.errors import ExecutionError
 from stl_lfd.sim.reference import Reference
 
@@ -22,24 +24,34 @@ class UnsafeReference(ExecutionError):
     """A reference leaves the workspace or moves faster than allowed; it was not executed."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Safety:
     """Limits every reference must respect.
 
     Attributes:
         lower, upper: corners (m, robot base frame) of the box every reference position lies in.
         max_speed: the fastest Cartesian speed (m/s) a reference may ask for.
+        max_angular_speed: the fastest turn of the hand (rad/s), or None for no limit.
     """
 
     lower: tuple[float, float, float]
     upper: tuple[float, float, float]
     max_speed: float
+    max_angular_speed: float | None = None
 
     def __post_init__(self) -> None:
         if not all(low < high for low, high in zip(self.lower, self.upper)):
             raise ValueError(f"the workspace's lower corner {list(self.lower)} must be below its upper corner {list(self.upper)} on every axis")
         if not self.max_speed > 0:
             raise ValueError(f"max_speed must be positive (got {self.max_speed})")
+        if self.max_angular_speed is not None and not self.max_angular_speed > 0:
+            raise ValueError(f"max_angular_speed must be positive (got {self.max_angular_speed})")
+
+    def __repr__(self) -> str:
+        # Without an angular limit, as before there was one: a scene's repr is the fingerprint
+        # that lets runs started with it resume.
+        angular = f", max_angular_speed={self.max_angular_speed!r}" if self.max_angular_speed is not None else ""
+        return f"Safety(lower={self.lower!r}, upper={self.upper!r}, max_speed={self.max_speed!r}{angular})"
 
 
 def check_reference(reference: Reference, safety: Safety) -> None:
@@ -67,6 +79,16 @@ def check_reference(reference: Reference, safety: Safety) -> None:
             f"unsafe reference, not executed: at t = {times[index]:.3f} s it moves at {speeds[index]:.3f} m/s near {_point(positions[index])}, "
             f"faster than the scene's max_speed of {safety.max_speed:g} m/s"
         )
+    if safety.max_angular_speed is not None and reference.orientations is not None:
+        turns = reference.orientations
+        angular = np.linalg.norm(rotations.log_map(turns[:-1], turns[1:]), axis=1) / np.diff(times)
+        too_fast = angular > safety.max_angular_speed
+        if too_fast.any():
+            index = int(np.argmax(too_fast))
+            raise UnsafeReference(
+                f"unsafe reference, not executed: at t = {times[index]:.3f} s the hand turns at {angular[index]:.3f} rad/s near {_point(positions[index])}, "
+                f"faster than the scene's max_angular_speed of {safety.max_angular_speed:g} rad/s"
+            )
 
 
 def _point(point: np.ndarray) -> str:

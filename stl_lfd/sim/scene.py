@@ -183,6 +183,8 @@ class Scene:
         for name, pose in placements.items():
             if name not in frames:
                 raise ConfigError(f"{source}: the scene {self.name} has no object frame '{name}' (its frames: {', '.join(frames) or 'none'})")
+            if not pose.turns_about_z_only:
+                raise ConfigError(f"{source}: {name}: a scene turns its objects about z only; give a yaw, not an orientation")
             _check_area(frames[name], pose, source)
 
     def place(self, placements: Mapping[str, Pose], source: str = "--place") -> "Scene":
@@ -330,11 +332,12 @@ def _parse_camera(data: Any, path: Path) -> Camera:
 
 
 def _parse_safety(data: Any, path: Path) -> Safety:
-    check_keys(data, ("workspace", "max_speed"), path, "safety", required=("workspace", "max_speed"))
+    check_keys(data, ("workspace", "max_speed", "max_angular_speed"), path, "safety", required=("workspace", "max_speed"))
     box = check_keys(data["workspace"], ("lower", "upper"), path, "safety.workspace", required=("lower", "upper"))
     lower, upper = (vector(box[key], 3, path, f"safety.workspace.{key}") for key in ("lower", "upper"))
     try:
-        return Safety(lower, upper, number(data["max_speed"], path, "safety.max_speed", positive=True))
+        angular = number(data["max_angular_speed"], path, "safety.max_angular_speed", positive=True) if "max_angular_speed" in data else None
+        return Safety(lower, upper, number(data["max_speed"], path, "safety.max_speed", positive=True), angular)
     except ValueError as error:
         raise ConfigError(f"{path}: 'safety': {error}") from None
 

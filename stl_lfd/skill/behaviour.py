@@ -26,6 +26,7 @@ import numpy as np
 from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
 from stl_lfd.poses import Pose
+from stl_lfd.rotations import DOWN
 from stl_lfd.sim import TIME_STEP, Reference
 from stl_lfd.skill.execution import reference_of
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
@@ -136,19 +137,22 @@ def behaviour_reference(
     grippers: list[np.ndarray] = []
     skills: list[np.ndarray] = []
     states: list[np.ndarray] = []
+    turns: list[np.ndarray | None] = []  # each piece's orientations (None: straight down)
     events: list[tuple[float, str]] = []
     clock, closed = 0.0, False
     for step in behaviour.steps:
         if isinstance(step, SkillStep):
             model = models[step.name]
             skill = reference_of(model, model.expected_duration() + step.settle, step.name, step.poses(poses))
-            positions, names, followed = skill.positions, skill.skills, skill.states
+            positions, names, followed, turn = skill.positions, skill.skills, skill.states, skill.orientations
         else:
             events.append((clock, step.action))
             closed = step.action == "grasp"
             positions = np.repeat(pieces[-1][-1:] if pieces else _first_position(behaviour, models, poses), _steps(step.seconds), axis=0)
             names, followed = np.full(len(positions), step.action), np.zeros(len(positions), dtype=int)
+            turn = None if not turns or turns[-1] is None else np.repeat(turns[-1][-1:], len(positions), axis=0)
         pieces.append(positions)
+        turns.append(turn)
         grippers.append(np.full(len(positions), 0.0 if closed else open_width))
         skills.append(names)
         states.append(followed)
@@ -161,9 +165,21 @@ def behaviour_reference(
                 np.concatenate([values, np.repeat(values[-1:], count - len(values), axis=0)]) for values in (positions, gripper, names, followed)
             )
         positions, gripper, names, followed = positions[:count], gripper[:count], names[:count], followed[:count]
+    orientations = _joined_orientations(turns, pieces, len(positions))
     times = np.arange(len(positions)) * TIME_STEP
     kept = tuple((time, action) for time, action in events if time <= times[-1])
-    return Reference(times, positions, gripper, kept, names, followed)
+    return Reference(times, positions, gripper, kept, names, followed, orientations)
+
+
+def _joined_orientations(turns: list[np.ndarray | None], pieces: list[np.ndarray], count: int) -> np.ndarray | None:
+    """The pieces' orientations joined (straight down where a piece has none), held at the end
+    or cut to `count` samples; None when no piece turns the hand."""
+    if all(turn is None for turn in turns):
+        return None
+    joined = np.concatenate([turn if turn is not None else np.tile(DOWN, (len(piece), 1)) for turn, piece in zip(turns, pieces)])
+    if count > len(joined):
+        joined = np.concatenate([joined, np.repeat(joined[-1:], count - len(joined), axis=0)])
+    return joined[:count]
 
 
 def _steps(seconds: float) -> int:

@@ -30,7 +30,9 @@ def reference_of(model: HSMM, duration: float | None = None, name: str = "skill"
     columns = [model.signal_names_.index(name) for name in POSITION_SIGNALS]
     gripper = trajectory.positions[:, model.signal_names_.index("gripper")] if "gripper" in model.signal_names_ else None
     skills = np.full(trajectory.times.shape, name)
-    return Reference(trajectory.times, trajectory.positions[:, columns], gripper, skills=skills, states=trajectory.states + 1)
+    return Reference(
+        trajectory.times, trajectory.positions[:, columns], gripper, skills=skills, states=trajectory.states + 1, orientations=trajectory.orientations
+    )
 
 
 def skill_poses(model: HSMM, poses: Mapping[str, Pose], name: str = "skill") -> dict[str, Pose]:

@@ -153,7 +153,8 @@ def test_telling_the_wrong_thing_is_a_clear_error_and_keeps_the_trial_pending(tm
         tell(run, short)
     no_force = tmp_path / "no_force.csv"
     lines = (trial_two.reference.parent / "full.csv").read_text().splitlines()
-    no_force.write_text("\n".join(",".join(line.split(",")[:-1]) for line in lines) + "\n")
+    force = lines[0].split(",").index("force")
+    no_force.write_text("\n".join(",".join(value for index, value in enumerate(line.split(",")) if index != force) for line in lines) + "\n")
     with pytest.raises(SignalError, match=r"no_force.csv: no column force, which the spec needs"):
         tell(run, no_force)
     assert RunDirectory.open(run).pending().trial == 2

@@ -18,7 +18,7 @@ PHI1 = str(ROOT / "specs" / "phi1.stl")
 def test_rollout_writes_csv_to_stdout_for_a_pipeline(learned_model_file):
     result = runner.invoke(app, ["rollout", str(learned_model_file), "--duration", "20", "--rate", "50"])
     assert result.exit_code == 0, result.stderr
-    assert result.stdout.startswith("t,x,y,z,gripper,force\n")
+    assert result.stdout.startswith("t,x,y,z,gripper,force,qx,qy,qz,qw,tilt\n")
     assert "x real time" in result.stderr and "tracking error RMS" in result.stderr
     piped = runner.invoke(app, ["robustness", PHI1, "-", "--semantics", "new"], input=result.stdout)
     assert piped.exit_code == 0, piped.stderr
@@ -32,7 +32,8 @@ def test_rollout_to_a_file(learned_model_file, tmp_path):
     assert result.exit_code == 0, result.stderr
     assert result.stdout == ""
     table = read_signal_csv(output)
-    assert table.samples == 501 and set(table.columns) == {"x", "y", "z", "gripper", "force"}
+    assert table.samples == 501 and set(table.columns) == {"x", "y", "z", "gripper", "force", "qx", "qy", "qz", "qw", "tilt"}
+    assert np.allclose(table.columns["qx"], 1.0) and np.allclose(table.columns["tilt"], 0.0)  # the hand points straight down
 
 
 @pytest.mark.parametrize(

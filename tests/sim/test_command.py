@@ -3,6 +3,7 @@
 import json
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 
 from stl_lfd.errors import ConfigError, ExecutionError, SignalError
 from stl_lfd.optim import finish_run, load_task, start_run
+from stl_lfd.rotations import DOWN, from_rotvec, multiply
 from stl_lfd.sim import (
     Command,
     CommandBackend,
@@ -57,11 +59,23 @@ def sample_reference():
 def test_the_reference_csv_reads_back_exactly(tmp_path):
     reference = sample_reference()
     write_reference_csv(reference, tmp_path / "reference.csv", 0.08)
-    assert (tmp_path / "reference.csv").read_text().splitlines()[0] == "t,x,y,z,gripper,skill,state,event"
+    assert (tmp_path / "reference.csv").read_text().splitlines()[0] == "t,x,y,z,gripper,skill,state,event,qx,qy,qz,qw"
     again = read_reference_csv(tmp_path / "reference.csv")
     assert np.array_equal(again.times, reference.times) and np.array_equal(again.positions, reference.positions)
     assert np.array_equal(again.gripper, reference.gripper) and again.events == reference.events
     assert list(again.skills) == list(reference.skills) and list(again.states) == [1, 2, 0, 1, 1]
+    assert again.orientations is None  # straight down throughout, as written for a skill without orientation
+
+
+def test_a_reference_with_orientations_reads_back_exactly_and_older_files_still_read(tmp_path):
+    turning = from_rotvec(np.outer(np.linspace(0, 1.5, 5), [0, 1, 0]))
+    reference = replace(sample_reference(), orientations=multiply(turning, DOWN))
+    write_reference_csv(reference, tmp_path / "reference.csv", 0.08)
+    again = read_reference_csv(tmp_path / "reference.csv")
+    assert np.array_equal(again.orientations, reference.orientations)
+    older = tmp_path / "older.csv"  # the columns before orientation was written
+    older.write_text("".join(",".join(line.split(",")[:8]) + "\n" for line in (tmp_path / "reference.csv").read_text().splitlines()))
+    assert read_reference_csv(older).orientations is None and np.array_equal(read_reference_csv(older).positions, reference.positions)
 
 
 def test_a_bad_reference_csv_names_the_line(tmp_path):

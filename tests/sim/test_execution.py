@@ -31,7 +31,8 @@ def test_pybullet_tracks_the_retrieved_skill_within_5_mm(pybullet_rollout):
 @pytest.mark.slow
 def test_recorded_signals_follow_the_signal_format(pybullet_rollout):
     signals = pybullet_rollout.signals
-    assert list(signals.columns) == ["x", "y", "z", "gripper", "force"]
+    assert list(signals.columns) == ["x", "y", "z", "gripper", "force", "qx", "qy", "qz", "qw", "tilt"]
+    assert np.degrees(signals.columns["tilt"]).max() < 1.0  # the hand points down, as the reference asks
     assert signals.samples == 2001 and signals.times[-1] == pytest.approx(20.0)
     assert np.allclose(signals.columns["gripper"], SCENE.gripper_opening, atol=1e-3)
     assert np.all(signals.columns["force"] == 0.0)  # nothing is touched in free space

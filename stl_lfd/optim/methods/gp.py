@@ -24,14 +24,12 @@ FIT_ITERATIONS = 100
 
 @contextmanager
 def single_threaded() -> Iterator[None]:
-    """Torch and BLAS on one thread for the block, restored afterwards.
-
-    These matrices are tiny (n <= a few hundred), so one thread is as fast as two, and it
-    avoids OpenMP threads spinning against the simulator or a parallel run on 2 cores
-    (measured: proposals 30x slower with two runs side by side). BLAS too, for
-    reproducibility: OpenBLAS's triangular solve rounds differently with more threads, the GP
-    fit's L-BFGS-B magnifies that, and the same seed gave other trials on a machine with
-    another core count."""
+    """Torch and BLAS on one thread for the block, restored afterwards: the matrices are tiny,
+    and the same seed must give the same trials whatever the number of cores."""
+    # One thread is as fast as two for n <= a few hundred, and OpenMP threads spinning against
+    # the simulator or a parallel run made proposals 30x slower on 2 cores. BLAS too: OpenBLAS's
+    # triangular solve rounds differently with more threads, the GP fit's L-BFGS-B magnifies
+    # that, and the same seed gave other trials on a machine with another core count.
     import scipy.linalg  # noqa: F401 (loaded before the limit, which only reaches loaded libraries)
     import torch
     from threadpoolctl import threadpool_limits
