@@ -136,8 +136,9 @@ def continuous(q: np.ndarray) -> np.ndarray:
 
 
 def checked_quaternions(q: np.ndarray, source: str) -> np.ndarray:
-    """`T x 4` quaternions read from `source`, normalised and made continuous; SignalError for a
-    NaN or a norm off 1 by more than UNIT_TOLERANCE (not a rotation: a unit or column mix-up)."""
+    """`T x 4` quaternions of the samples of `source` (a signal CSV: sample i is on line i + 2,
+    after the header), normalised and made continuous; SignalError naming the line for a NaN or
+    a norm off 1 by more than UNIT_TOLERANCE (not a rotation: a unit or column mix-up)."""
     q = np.asarray(q, dtype=float)
     norms = np.linalg.norm(q, axis=-1)
     bad = np.flatnonzero(~np.isfinite(norms) | (np.abs(norms - 1.0) > UNIT_TOLERANCE))
@@ -145,7 +146,7 @@ def checked_quaternions(q: np.ndarray, source: str) -> np.ndarray:
         row = int(bad[0])
         shown = ",".join(f"{value:g}" for value in q[row])
         raise SignalError(
-            f"{source}: row {row + 1}: qx,qy,qz,qw = {shown} is not a unit quaternion (norm {norms[row]:.4g}; expected 1 within {UNIT_TOLERANCE:g})"
+            f"{source}:{row + 2}: qx,qy,qz,qw = {shown} is not a unit quaternion (norm {norms[row]:.4g}; expected 1 within {UNIT_TOLERANCE:g})"
         )
     return continuous(q / norms[:, None])
 

@@ -183,6 +183,55 @@ CASES = [
         "differ from",
         {"a.csv": "t,x,y,z\n0,1,1,1\n1,1,1,1\n", "b.csv": "t,x,y,z,g\n0,1,1,1,0\n1,1,1,1,0\n"},
     ),
+    Case(
+        "learn-quaternion-nan",
+        ["learn", "{case}", "-o", "{case}/m.npz"],
+        4,
+        "d.csv:3: column 'qw' is nan",
+        {"d.csv": "t,x,y,z,qx,qy,qz,qw\n0,1,1,1,1,0,0,0\n1,1,1,1,1,0,0,nan\n"},
+    ),
+    Case(
+        "learn-quaternion-not-unit",
+        ["learn", "{case}", "-o", "{case}/m.npz"],
+        4,
+        "d.csv:2: qx,qy,qz,qw = 2,0,0,0 is not a unit quaternion (norm 2",
+        {"d.csv": "t,x,y,z,qx,qy,qz,qw\n0,1,1,1,2,0,0,0\n1,1,1,1,2,0,0,0\n"},
+    ),
+    Case(
+        "learn-quaternion-partial",
+        ["learn", "{case}", "-o", "{case}/m.npz"],
+        4,
+        "the orientation needs all of qx, qy, qz, qw (no column qw)",
+        {"d.csv": "t,x,y,z,qx,qy,qz\n0,1,1,1,1,0,0\n1,1,1,1,1,0,0\n"},
+    ),
+    Case(
+        "learn-sidecar-orientation-not-unit",
+        ["learn", "{case}", "-o", "{case}/m.npz"],
+        5,
+        "'frames.cup.orientation' must be a unit quaternion [qx, qy, qz, qw] (its norm is 0.5)",
+        {"d.csv": "t,x,y,z\n0,1,1,1\n1,1,1,1\n", "d.frames.yaml": "frames: {cup: {position: [0.5, 0, 0], orientation: [0.5, 0, 0, 0]}}\n"},
+    ),
+    Case(
+        "learn-sidecar-orientation-and-yaw",
+        ["learn", "{case}", "-o", "{case}/m.npz"],
+        5,
+        "'frames.cup' gives both 'yaw' and 'orientation'; give one",
+        {"d.csv": "t,x,y,z\n0,1,1,1\n1,1,1,1\n", "d.frames.yaml": "frames: {cup: {position: [0.5, 0, 0], yaw: 1, orientation: [0, 0, 0, 1]}}\n"},
+    ),
+    Case(
+        "learn-sidecar-orientation-short",
+        ["learn", "{case}", "-o", "{case}/m.npz"],
+        5,
+        "'frames.cup.orientation' must be a list of 4 numbers",
+        {"d.csv": "t,x,y,z\n0,1,1,1\n1,1,1,1\n", "d.frames.yaml": "frames: {cup: {position: [0.5, 0, 0], orientation: [0, 0, 1]}}\n"},
+    ),
+    Case(
+        "learn-orientation-with-frames",
+        ["learn", "{case}", "-o", "{case}/m.npz", "-K", "1"],
+        6,
+        "skills with frames follow positions only for now",
+        {"d.csv": "t,x,y,z,qx,qy,qz,qw\n0,1,1,1,1,0,0,0\n1,1,1,1,1,0,0,0\n", "d.frames.yaml": "frames: {cup: {position: [0.5, 0, 0]}}\n"},
+    ),
     # --- models and retrieval ---------------------------------------------------------------
     Case("model-missing", ["retrieve", "{case}/nope.npz"], 6, "no such model file"),
     Case("model-empty", ["retrieve", "{case}/m.npz"], 6, "not a model file (it is empty)", {"m.npz": b""}),
@@ -259,7 +308,7 @@ CASES = [
     task_case("task-nothing-to-optimise", "selects nothing to optimise", parameters="{}"),
     task_case("task-state-out-of-range", "state 9", parameters="{means: {components: [9]}}"),
     task_case("task-state-twice", "lists a state twice", parameters="{means: {components: [2, 2]}}"),
-    task_case("task-coordinate", "may hold x, y, z (got 'w')", parameters="{means: {components: [2], coordinates: [w]}}"),
+    task_case("task-coordinate", "may hold x, y, z, rx, ry, rz (got 'w')", parameters="{means: {components: [2], coordinates: [w]}}"),
     task_case("task-beta-negative", "'parameters.means.beta' must be positive", parameters="{means: {components: [2], beta: -1}}"),
     task_case("task-transitions", "'parameters.transitions' must be one of none, band, full", parameters="{transitions: diag}"),
     task_case("task-horizon", "looks 17 s ahead but rollouts last 5 s", duration="5"),
@@ -348,35 +397,35 @@ CASES = [
         ["rollout", "{model}", "--backend", "command", "--command", "no-such-program-xyz {{reference}}"],
         7,
         "cannot start the command 'no-such-program-xyz' (No such file or directory)",
-    ),  # fmt: skip
+    ),
     Case(
         "rollout-command-no-safety",
         ["rollout", "{model}", "--scene", "{case}/s.yaml", "--backend", "command", "--command", "x"],
         7,
         "the scene s declares no 'safety'",
         {"s.yaml": "description: bare\n"},
-    ),  # fmt: skip
+    ),
     Case(
         "rollout-command-unsafe",
         ["rollout", "{model}", "--scene", "{case}/s.yaml", "--backend", "command", "--command", "x"],
         7,
         "unsafe reference, not executed: at t = 0.000 s it reaches",
         {"s.yaml": "description: x\nsafety: {workspace: {lower: [0, 0, 0], upper: [0.1, 0.1, 0.1]}, max_speed: 1}\n"},
-    ),  # fmt: skip
+    ),
     Case(
         "scene-safety-inverted",
         ["rollout", "{model}", "--scene", "{case}/s.yaml"],
         5,
         "'safety': the workspace's lower corner [0.5, 0.0, 0.0] must be below",
         {"s.yaml": "description: x\nsafety: {workspace: {lower: [0.5, 0, 0], upper: [0.4, 1, 1]}, max_speed: 1}\n"},
-    ),  # fmt: skip
+    ),
     Case(
         "scene-safety-no-speed",
         ["rollout", "{model}", "--scene", "{case}/s.yaml"],
         5,
         "missing key 'safety.max_speed'",
         {"s.yaml": "description: x\nsafety: {workspace: {lower: [0, 0, 0], upper: [1, 1, 1]}}\n"},
-    ),  # fmt: skip
+    ),
     Case("tell-nothing-pending", ["tell", "{run}", "{csv}"], 9, "no trial is pending; hand out the next one with: stlopt ask"),
     Case("tell-no-signals", ["tell", "{run}"], 5, "give the signals CSV of the pending trial, or --failed REASON"),
     Case("tell-missing-run", ["tell", "{case}/nope", "{csv}"], 9, "no such run directory"),
@@ -400,21 +449,21 @@ CASES = [
         5,
         "'duration' must be positive",
         {"s.yaml": "tasks: [t.yaml]\n", "t.yaml": task_text(duration="0")},
-    ),  # fmt: skip
+    ),
     Case(
         "sweep-bad-seeds",
         ["sweep", "{case}/s.yaml", "--out", "{case}/out"],
         5,
         "'seeds' must be at least 0",
         {"s.yaml": "tasks: [t.yaml]\nseeds: [1, -2]\n", "t.yaml": task_text()},
-    ),  # fmt: skip
+    ),
     Case(
         "sweep-out-is-file",
         ["sweep", "{case}/s.yaml", "--out", "{case}/f.txt"],
         8,
         "is a file; the sweep folder must be a folder",
         {"s.yaml": "tasks: [t.yaml]\n", "t.yaml": task_text(), "f.txt": "x"},
-    ),  # fmt: skip
+    ),
     Case("report-sweep-options", ["report", "{case}", "--out", "{case}/r"], 5, "a sweep folder's report is its table and sweep.png", {"sweep.csv": "cell\n"}),
 ]
 

@@ -11,11 +11,13 @@ from typing import Any, Iterator
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_SEED, MAX_TRIALS, MAX_WORKERS
+from stl_lfd.rotations import ROTATION_COLUMNS
 from stl_lfd.yamlfile import check_keys, integer, number, shown
 
 SINGLE_SKILL = "skill"  # the name of the one skill of a task without a behaviour
 TRANSITIONS = ("none", "band", "full")
-COORDINATES = ("x", "y", "z")
+POSITION_COORDINATES = ("x", "y", "z")
+COORDINATES = POSITION_COORDINATES + ROTATION_COLUMNS  # a skill with orientation also moves its rotation vector
 
 
 @dataclass(frozen=True)
@@ -23,10 +25,12 @@ class MeanParameters:
     """State means to optimise: `components` (1-based), `coordinates`, bounds mean +- beta std;
     `together` moves the components by one shared offset (e.g. an approach and a final pose);
     `frame` names the frame of a TP-HSMM in which they move (bounds from that frame's
-    covariance)."""
+    covariance). For a skill with orientation, `rx, ry, rz` move the state's mean orientation
+    (its rotation vector relative to the skill's reference orientation, in radians), bounded by
+    the state's orientation covariance."""
 
     components: tuple[int, ...] = ()
-    coordinates: tuple[str, ...] = COORDINATES
+    coordinates: tuple[str, ...] = POSITION_COORDINATES
     beta: float = 2.0
     together: bool = False
     frame: str | None = None  # for a TP-HSMM: the frame the means move in
@@ -35,7 +39,7 @@ class MeanParameters:
         _check_states(self.components, "means.components")
         unknown = [coordinate for coordinate in self.coordinates if coordinate not in COORDINATES]
         if unknown or not self.coordinates:
-            raise ConfigError(f"'means.coordinates' may hold x, y, z (got {shown(list(self.coordinates))})")
+            raise ConfigError(f"'means.coordinates' may hold {', '.join(COORDINATES)} (got {shown(list(self.coordinates))})")
         if not self.beta > 0:
             raise ConfigError(f"'means.beta' must be positive (got {self.beta})")
 
@@ -138,10 +142,10 @@ def parameters_from_yaml(data: Any, path: Path, where: str) -> Parameters:
             raise ConfigError(f"{path}: '{where}.means.frame' must be the name of one of the model's frames (got {shown(item['frame'])})")
         if not isinstance(item.get("together", False), bool):
             raise ConfigError(f"{path}: '{where}.means.together' must be true or false")
-        coordinates = tuple(item.get("coordinates", COORDINATES))
+        coordinates = tuple(item.get("coordinates", POSITION_COORDINATES))
         for coordinate in coordinates:
             if coordinate not in COORDINATES:
-                raise ConfigError(f"{path}: '{where}.means.coordinates' may hold x, y, z (got {shown(coordinate)})")
+                raise ConfigError(f"{path}: '{where}.means.coordinates' may hold {', '.join(COORDINATES)} (got {shown(coordinate)})")
         means = MeanParameters(
             components=components_from_yaml(item["components"], path, f"{where}.means.components", allow_all=False),
             coordinates=coordinates,

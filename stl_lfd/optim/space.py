@@ -22,6 +22,7 @@ import numpy as np
 from stl_lfd.errors import ConfigError, ModelError
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim.settings import SINGLE_SKILL, Parameters
+from stl_lfd.rotations import ROTATION_COLUMNS
 
 
 @dataclass(frozen=True)
@@ -113,7 +114,8 @@ def build_space(model: HSMM, parameters: Parameters, source: Path | str = "task"
                 raise ConfigError(f"{source}: 'parameters.means': {error}") from None
             value, spread = model.means_[group[0], coordinate], means.beta * stds[coordinate]
             frame = f"{means.frame}." if means.frame is not None else ""
-            add(f"mean[{label}].{frame}{name}", value, value - spread, value + spread)
+            kind = "orient" if name in ROTATION_COLUMNS else "mean"
+            add(f"{kind}[{label}].{frame}{name}", value, value - spread, value + spread)
             mean_slots.append((group, coordinate))
 
     durations = parameters.durations

@@ -65,8 +65,8 @@ def test_demonstrated_quaternions_are_made_continuous_and_bad_ones_are_refused(t
     assert np.allclose(np.abs(np.sum(quaternions * np.column_stack([demo.columns[name] for name in QUATERNION_COLUMNS]), axis=1)), 1.0)
     slightly = SignalTable(demo.times, dict(demo.columns) | {"qw": demo.columns["qw"] * 1.0002}, demo.source)
     assert np.allclose(np.linalg.norm(np.column_stack([with_checked_orientation(slightly).columns[n] for n in QUATERNION_COLUMNS]), axis=1), 1.0)
-    for change, message in (({"qw": np.where(np.arange(demo.samples) == 7, np.nan, demo.columns["qw"])}, "row 8: .* is not a unit quaternion"),
-                            ({"qx": demo.columns["qx"] * 2}, "row 1: .* is not a unit quaternion \\(norm 2"),
+    for change, message in (({"qw": np.where(np.arange(demo.samples) == 7, np.nan, demo.columns["qw"])}, "demo.csv:9: .* is not a unit quaternion"),
+                            ({"qx": demo.columns["qx"] * 2}, "demo.csv:2: .* is not a unit quaternion \\(norm 2"),
                             ):  # fmt: skip
         with pytest.raises(SignalError, match=message):
             with_checked_orientation(SignalTable(demo.times, dict(demo.columns) | change, "demo.csv"))
@@ -132,7 +132,7 @@ def test_pose_demonstration_files_learn_from_a_folder(tmp_path):
     assert model.orientation is not None and "rx" in model.signal_names_
     broken = read_signal_csv(tmp_path / "demos" / "demo_02.csv")
     write_signal_csv(SignalTable(broken.times, dict(broken.columns) | {"qx": broken.columns["qx"] + 0.5}, "x"), tmp_path / "demos" / "demo_02.csv")
-    with pytest.raises(SignalError, match="demo_02.csv: row 1: .* is not a unit quaternion"):
+    with pytest.raises(SignalError, match="demo_02.csv:2: .* is not a unit quaternion"):
         learn_from_folder(tmp_path / "demos", 5)
 
 
