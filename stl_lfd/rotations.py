@@ -145,9 +145,7 @@ def checked_quaternions(q: np.ndarray, source: str) -> np.ndarray:
     if bad.size:
         row = int(bad[0])
         shown = ",".join(f"{value:g}" for value in q[row])
-        raise SignalError(
-            f"{source}:{row + 2}: qx,qy,qz,qw = {shown} is not a unit quaternion (norm {norms[row]:.4g}; expected 1 within {UNIT_TOLERANCE:g})"
-        )
+        raise SignalError(f"{source}:{row + 2}: qx,qy,qz,qw = {shown} is not a unit quaternion (norm {norms[row]:.4g}; expected 1 within {UNIT_TOLERANCE:g})")
     return continuous(q / norms[:, None])
 
 

@@ -225,13 +225,6 @@ CASES = [
         "'frames.cup.orientation' must be a list of 4 numbers",
         {"d.csv": "t,x,y,z\n0,1,1,1\n1,1,1,1\n", "d.frames.yaml": "frames: {cup: {position: [0.5, 0, 0], orientation: [0, 0, 1]}}\n"},
     ),
-    Case(
-        "learn-orientation-with-frames",
-        ["learn", "{case}", "-o", "{case}/m.npz", "-K", "1"],
-        6,
-        "skills with frames follow positions only for now",
-        {"d.csv": "t,x,y,z,qx,qy,qz,qw\n0,1,1,1,1,0,0,0\n1,1,1,1,1,0,0,0\n", "d.frames.yaml": "frames: {cup: {position: [0.5, 0, 0]}}\n"},
-    ),
     # --- models and retrieval ---------------------------------------------------------------
     Case("model-missing", ["retrieve", "{case}/nope.npz"], 6, "no such model file"),
     Case("model-empty", ["retrieve", "{case}/m.npz"], 6, "not a model file (it is empty)", {"m.npz": b""}),

@@ -97,7 +97,9 @@ class HSMM:
         lengths = np.asarray(lengths, dtype=int)
         self._check_data(X, lengths)
         names = list(signal_names) if signal_names is not None else [f"s{i}" for i in range(X.shape[1])]
-        X, self.signal_names_, self.orientation_reference_ = to_model_columns(X, names)
+        X, self.signal_names_, reference = to_model_columns(X, names)
+        if reference is not None or not self._coordinates().rotations:  # a TP-HSMM sets its frames' references itself
+            self.orientation_reference_ = reference
         self.sample_period_ = float(sample_period)
         sequences = np.split(X, np.cumsum(lengths)[:-1])
         best = None
@@ -220,7 +222,7 @@ class HSMM:
             if transmat[state].sum() > 0:
                 state = rng.choice(self.n_states, p=transmat[state])
         coordinates = self._coordinates()
-        if coordinates.rotation is None:
+        if not coordinates.rotations:
             X = np.array([rng.multivariate_normal(self.means_[k], self.covars_[k]) for k in states])
         else:
             X = np.array([coordinates.shifted(self.means_[k], rng.multivariate_normal(np.zeros(self.n_features), self.covars_[k])) for k in states])
@@ -261,16 +263,18 @@ class HSMM:
             raise ModelError(f"end_state_, end_offsets_ and end_covars_ must be a state, ({D},) and ({D}, {D})")
         if end is not None and not (np.all(np.isfinite(end[1])) and np.all(np.isfinite(end[2]))):
             raise ModelError("the end point contains NaN or infinity")
-        rotation = self._coordinates().rotation
-        if rotation is not None and not (np.shape(self.orientation) == (4,) and np.isclose(np.linalg.norm(self.orientation), 1.0)):
-            raise ModelError("a model with orientation (rx, ry, rz) needs orientation_reference_, a unit quaternion")
+        blocks = len(self._coordinates().rotations)
+        references = np.atleast_2d(self.orientation) if self.orientation is not None else np.empty((0, 4))
+        if blocks and not (references.shape == (blocks, 4) and np.allclose(np.linalg.norm(references, axis=-1), 1.0)):
+            raise ModelError(f"a model with orientation (rx, ry, rz) needs orientation_reference_: {blocks} unit quaternion(s), one per frame")
         if not np.isclose(np.sum(self.startprob_), 1.0):
             raise ModelError(f"startprob_ must sum to 1 (got {np.sum(self.startprob_):.6g})")
 
     @property
     def orientation(self) -> np.ndarray | None:
-        """The quaternion the model's rotation vectors are relative to; None for positions only
-        (and for models from files written before skills had orientation)."""
+        """The quaternion the model's rotation vectors are relative to (for a TP-HSMM, one per
+        frame); None for positions only (and for models from files written before skills had
+        orientation)."""
         return getattr(self, "orientation_reference_", None)
 
     def orientations(self, points: np.ndarray) -> np.ndarray | None:
@@ -324,7 +328,7 @@ class HSMM:
             bins = [np.split(sequence, np.sort(rng.choice(np.arange(1, len(sequence)), K - 1, replace=False))) for sequence in sequences]
         pooled = [np.concatenate([b[k] for b in bins]) for k in range(K)]
         coordinates = self._coordinates()
-        if coordinates.rotation is None:
+        if not coordinates.rotations:
             self.means_ = np.array([samples.mean(axis=0) for samples in pooled])
             covars = [np.atleast_2d(np.cov(samples.T, bias=True)) if len(samples) > 1 else np.zeros((D, D)) for samples in pooled]
         else:
@@ -336,7 +340,7 @@ class HSMM:
 
     def _coordinates(self) -> Coordinates:
         """Where the model's columns hold an orientation (see `stl_lfd.hsmm.orientation`)."""
-        return Coordinates.of(list(self.signal_names_))
+        return Coordinates.of(self.feature_names)
 
     def _constrained(self, covars: np.ndarray) -> np.ndarray:
         """The covariances EM may use (all of them here; block-diagonal in `TPHSMM`)."""
@@ -353,7 +357,7 @@ class HSMM:
         """`B x T x K` Gaussian likelihoods divided by their largest value per frame, and the
         `B x T` logs of those divisors (which the log-likelihood adds back)."""
         coordinates = self._coordinates()
-        if coordinates.rotation is None:
+        if not coordinates.rotations:
             log_likelihood = np.stack([gaussian_log_density(padded, self.means_[k], self.covars_[k]) for k in range(self.n_states)], axis=-1)
         else:
             deviations = [coordinates.deviations(padded, self.means_[k]) for k in range(self.n_states)]
@@ -367,7 +371,7 @@ class HSMM:
         weights = gamma.sum(axis=(0, 1))  # K
         safe = np.maximum(weights, 1e-12)
         coordinates = self._coordinates()
-        if coordinates.rotation is None:
+        if not coordinates.rotations:
             self.means_ = np.einsum("btk,btd->kd", gamma, padded) / safe[:, None]
             centred = padded[:, :, None, :] - self.means_[None, None]  # B x T x K x D
         else:
@@ -411,7 +415,7 @@ class HSMM:
         mean moves the end with it."""
         self.end_state_ = self.nominal_path()[-1]
         coordinates = self._coordinates()
-        if coordinates.rotation is None:
+        if not coordinates.rotations:
             self.end_offsets_ = ends.mean(axis=0) - self.means_[self.end_state_]
             spread = np.atleast_2d(np.cov(ends.T, bias=True)) if len(ends) > 1 else np.zeros((ends.shape[1],) * 2)
         else:

@@ -25,58 +25,66 @@ from stl_lfd.rotations import QUATERNION_COLUMNS, ROTATION_COLUMNS
 
 @dataclass(frozen=True)
 class Coordinates:
-    """Which of a model's `D` columns hold a rotation vector (`rotation`, 3 columns), if any."""
+    """Which of a model's `D` columns hold rotation vectors: `rotations`, one 3-column slice per
+    orientation (one per frame of a TP-HSMM), none for positions only."""
 
-    rotation: slice | None = None
+    rotations: tuple[slice, ...] = ()
 
     @classmethod
     def of(cls, names: list[str]) -> "Coordinates":
-        """The coordinates of a model whose columns are `names`."""
-        if not set(ROTATION_COLUMNS) & set(names):
-            return cls()
-        start = names.index(ROTATION_COLUMNS[0]) if ROTATION_COLUMNS[0] in names else -1
-        if start < 0 or tuple(names[start : start + 3]) != ROTATION_COLUMNS:
+        """The coordinates of a model whose columns are `names` (`rx` or `FRAME.rx` and so on)."""
+        bare = [name.rsplit(".", 1)[-1] for name in names]
+        starts = [index for index, name in enumerate(bare) if name == ROTATION_COLUMNS[0]]
+        if any(tuple(bare[start : start + 3]) != ROTATION_COLUMNS for start in starts) or bare.count("ry") != len(starts) or bare.count("rz") != len(starts):
             raise ModelError(f"a model's orientation must be the columns rx, ry, rz in that order (got {', '.join(names)})")
-        return cls(slice(start, start + 3))
+        return cls(tuple(slice(start, start + 3) for start in starts))
+
+    @property
+    def rotation(self) -> slice | None:
+        """The rotation vector's columns of a model in one frame (None without orientation)."""
+        return self.rotations[0] if self.rotations else None
 
     def deviations(self, points: np.ndarray, mean: np.ndarray) -> np.ndarray:
-        """`... x D` deviations of points from a state's `D` mean: differences, and for the
+        """`... x D` deviations of points from a state's `D` mean: differences, and for an
         orientation the tangent vector at the mean's orientation."""
         deviation = np.asarray(points, dtype=float) - mean
-        if self.rotation is not None:
-            deviation[..., self.rotation] = rotations.log_map(rotations.from_rotvec(mean[self.rotation]), rotations.from_rotvec(points[..., self.rotation]))
+        for block in self.rotations:
+            deviation[..., block] = rotations.log_map(rotations.from_rotvec(mean[block]), rotations.from_rotvec(points[..., block]))
         return deviation
 
     def mean(self, points: np.ndarray, weights: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:
-        """The weighted mean of `N x D` points: the average, and for the orientation the mean on
+        """The weighted mean of `N x D` points: the average, and for an orientation the mean on
         the sphere (from `start`'s orientation, if given)."""
         mean = weights @ points / max(float(weights.sum()), 1e-300)
-        if self.rotation is not None:
-            begin = None if start is None else rotations.from_rotvec(start[self.rotation])
-            quaternion = rotations.weighted_mean(rotations.from_rotvec(points[:, self.rotation]), weights, begin)
-            mean[self.rotation] = rotations.to_rotvec(quaternion)
+        for block in self.rotations:
+            begin = None if start is None else rotations.from_rotvec(start[block])
+            mean[block] = rotations.to_rotvec(rotations.weighted_mean(rotations.from_rotvec(points[:, block]), weights, begin))
         return mean
 
     def shifted(self, mean: np.ndarray, deviations: np.ndarray) -> np.ndarray:
         """`... x D` points at `deviations` from `mean` (the inverse of `deviations`)."""
-        points = mean + np.asarray(deviations, dtype=float)
-        if self.rotation is not None:
-            moved = rotations.exp_map(rotations.from_rotvec(mean[self.rotation]), deviations[..., self.rotation])
-            points[..., self.rotation] = rotations.to_rotvec(moved)
+        deviations = np.asarray(deviations, dtype=float)
+        points = mean + deviations
+        for block in self.rotations:
+            points[..., block] = rotations.to_rotvec(rotations.exp_map(rotations.from_rotvec(mean[block]), deviations[..., block]))
         return points
 
+    def transport(self, mean: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """`D x D`: tangent vectors at `mean`'s orientations carried to `target`'s (quaternions,
+        one row per orientation), the other columns unchanged (see `rotations.transport`)."""
+        matrix = np.eye(mean.shape[0])
+        for block, to in zip(self.rotations, np.atleast_2d(target)):
+            matrix[block, block] = rotations.transport(rotations.from_rotvec(mean[block]), to)
+        return matrix
+
     def at_reference(self, means: np.ndarray, covariances: np.ndarray) -> np.ndarray:
-        """`S x D x D` covariances with their orientation block transported from each state's
+        """`S x D x D` covariances with their orientation blocks transported from each state's
         mean orientation (`S x D` means) to the reference's tangent space, where the tracker
-        works (see `rotations.transport`)."""
-        if self.rotation is None:
+        works."""
+        if not self.rotations:
             return covariances
-        moved = np.array(covariances, dtype=float)
-        for index, mean in enumerate(means):
-            transport = np.eye(mean.shape[0])
-            transport[self.rotation, self.rotation] = rotations.transport(rotations.from_rotvec(mean[self.rotation]), rotations.IDENTITY)
-            moved[index] = transport @ moved[index] @ transport.T
-        return moved
+        identities = np.tile(rotations.IDENTITY, (len(self.rotations), 1))
+        return np.array([self.transport(mean, identities) @ covariance @ self.transport(mean, identities).T for mean, covariance in zip(means, covariances)])
 
 
 def to_model_columns(X: np.ndarray, names: list[str]) -> tuple[np.ndarray, list[str], np.ndarray | None]:

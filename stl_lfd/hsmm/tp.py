@@ -6,8 +6,12 @@ durations (Calinon 2016; Rozo et al. 2020). For new object poses, `TPHSMM.at` tr
 frame's Gaussians to the base frame and multiplies them: the result is an ordinary `HSMM`,
 which the state sequence and the tracker use as before.
 
-Poses move the position signals `x, y, z` (rotation about z by the yaw, then translation);
-other signals (a gripper opening) are the same in every frame.
+Poses move the position signals `x, y, z` (rotated by the frame's orientation, a yaw or any
+rotation, then translated) and the hand's orientation (`qx, qy, qz, qw`: expressed in each
+frame, then as a rotation vector relative to that frame's mean orientation, see
+`stl_lfd.hsmm.orientation`); other signals (a gripper opening) are the same in every frame.
+With orientation, the frames' Gaussians on R^n x S^3 are multiplied in the tangent space at
+the product's mean, found by Gauss-Newton iterations (Zeestraten et al., RA-L 2017).
 """
 
 from __future__ import annotations
@@ -16,8 +20,10 @@ from typing import Mapping
 
 import numpy as np
 
+import stl_lfd.rotations as rotations
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm.model import HSMM
+from stl_lfd.hsmm.orientation import Coordinates, to_model_columns
 from stl_lfd.poses import BASE_FRAME, Pose
 from stl_lfd.rotations import QUATERNION_COLUMNS
 
@@ -31,7 +37,10 @@ class TPHSMM(HSMM):
         frame_names_: the P frames; `base` is the robot base frame, fixed at the origin.
         means_: `K x (P*D)`: each state's mean in frame 1, then in frame 2, ... (D signals each).
         covars_: `K x P*D x P*D`, block diagonal: the frames are independent given the state.
-        signal_names_: the D signals (as in the demonstrations, base frame).
+        signal_names_: the D signals (as in the demonstrations, base frame; with orientation,
+            `rx, ry, rz` in place of `qx, qy, qz, qw`).
+        orientation_reference_: with orientation, `P x 4`: each frame's mean orientation of the
+            hand, which that frame's rotation vectors are relative to.
     """
 
     def fit(  # type: ignore[override]
@@ -55,8 +64,6 @@ class TPHSMM(HSMM):
         """
         signal_names = list(signal_names)
         _check_positions(signal_names)
-        if set(QUATERNION_COLUMNS) & set(signal_names):
-            raise ModelError("skills with frames follow positions only for now: leave out the qx, qy, qz, qw columns, or learn without frame sidecars")
         if not frame_names or len(set(frame_names)) != len(frame_names):
             raise ModelError(f"frames must be distinct names (got {', '.join(frame_names) or 'none'})")
         lengths = np.asarray(lengths, dtype=int)
@@ -68,12 +75,20 @@ class TPHSMM(HSMM):
             np.hstack([_to_frame(sequence, _pose(demo_poses, name), signal_names) for name in self.frame_names_])
             for sequence, demo_poses in zip(sequences, poses)
         ]
-        return super().fit(np.concatenate(local), lengths, sample_period, signal_names)  # type: ignore[return-value]
+        X = np.concatenate(local)
+        if not set(QUATERNION_COLUMNS) & set(signal_names):
+            return super().fit(X, lengths, sample_period, signal_names)  # type: ignore[return-value]
+        D = len(signal_names)
+        blocks = [to_model_columns(X[:, index * D : (index + 1) * D], signal_names) for index in range(len(self.frame_names_))]
+        self.orientation_reference_ = np.array([reference for _, _, reference in blocks])
+        return super().fit(np.hstack([block for block, _, _ in blocks]), lengths, sample_period, blocks[0][1])  # type: ignore[return-value]
 
     def at(self, poses: Mapping[str, Pose]) -> HSMM:
         """The skill for frames at `poses` (name -> pose; every frame but `base` required):
         an `HSMM` in the base frame whose state Gaussians are the products of the frames'."""
         self._check()
+        if self.orientation is not None:
+            return self._at_with_orientation(poses)
         D, names = len(self.signal_names_), self.signal_names_
         end = self.end_target()
         # The end point's Gaussian travels with the states' as one more row.
@@ -95,6 +110,39 @@ class TPHSMM(HSMM):
         for name in ("duration_means_", "duration_stds_", "transmat_", "startprob_"):
             setattr(model, name, np.array(getattr(self, name), dtype=float))
         model.sample_period_, model.signal_names_, model.orientation_reference_ = self.sample_period_, list(names), None
+        return model
+
+    def _at_with_orientation(self, poses: Mapping[str, Pose]) -> HSMM:
+        """`at` for a skill with orientation: each frame's state Gaussians (and the end point's)
+        taken to the base frame, multiplied on R^n x S^3, and written as an `HSMM` whose rotation
+        vectors are relative to the mean of the products' orientations."""
+        D, names = len(self.signal_names_), self.signal_names_
+        block = Coordinates.of(names)
+        rows, covars = self.means_, self.covars_
+        end = self.end_target()
+        if end is not None:  # the end point's Gaussian travels with the states' as one more row
+            rows, covars = np.vstack([rows, end[1]]), np.concatenate([covars, end[2][None]])
+        frames = []  # per frame: (S x D base means with the rotation columns unused, S x 4 orientations, S x D x D covariances)
+        for index, frame in enumerate(self.frame_names_):
+            pose, columns = _pose(poses, frame), slice(index * D, (index + 1) * D)
+            rotation, offset = _transform(pose, names)
+            local = rows[:, columns]
+            orientations = rotations.multiply(pose.orientation, rotations.exp_map(self.orientation[index], local[:, block.rotation]))
+            frames.append((local @ rotation.T + offset, orientations, rotation @ covars[:, columns, columns] @ rotation.T))
+        products = [_manifold_product([(means[row], turns[row], covariances[row]) for means, turns, covariances in frames], block) for row in range(len(rows))]
+        reference = rotations.weighted_mean(np.array([turn for _, turn, _ in products[: self.n_states]]))
+        base = np.array(
+            [np.concatenate([mean[: block.rotation.start], rotations.log_map(reference, turn), mean[block.rotation.stop :]]) for mean, turn, _ in products]
+        )
+        model = HSMM(self.n_states, self.n_iter, self.tol, self.reg_covar)
+        model.means_, model.covars_ = base[: self.n_states], np.array([covariance for _, _, covariance in products[: self.n_states]])
+        if end is not None:
+            model.end_state_ = end[0]
+            model.end_offsets_ = block.deviations(base[-1], base[end[0]])
+            model.end_covars_ = products[-1][2]
+        for name in ("duration_means_", "duration_stds_", "transmat_", "startprob_"):
+            setattr(model, name, np.array(getattr(self, name), dtype=float))
+        model.sample_period_, model.signal_names_, model.orientation_reference_ = self.sample_period_, list(names), reference
         return model
 
     @property
@@ -145,9 +193,43 @@ def _transform(pose: Pose, signal_names: list[str]) -> tuple[np.ndarray, np.ndar
 
 
 def _to_frame(samples: np.ndarray, pose: Pose, signal_names: list[str]) -> np.ndarray:
-    """`T x D` base-frame samples expressed in the frame at `pose`."""
+    """`T x D` base-frame samples expressed in the frame at `pose` (an orientation's quaternion
+    columns too)."""
     rotation, offset = _transform(pose, signal_names)
-    return (samples - offset) @ rotation
+    local = (samples - offset) @ rotation
+    if set(QUATERNION_COLUMNS) <= set(signal_names):
+        columns = [signal_names.index(name) for name in QUATERNION_COLUMNS]
+        local[:, columns] = rotations.multiply(rotations.conjugate(pose.orientation), samples[:, columns])
+    return local
+
+
+def _manifold_product(
+    gaussians: list[tuple[np.ndarray, np.ndarray, np.ndarray]], block: Coordinates, iterations: int = 50
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The product of Gaussians on R^n x S^3, each `(D mean, 4 orientation, D x D covariance)`
+    with the orientation's covariance in the tangent space at its own mean (columns `block`):
+    Gauss-Newton in the tangent space at the current estimate, each covariance transported
+    there, until the step is below 1e-12. Returns the mean (its rotation columns unused), the
+    orientation and the covariance at it. One Gaussian is returned as it is."""
+    if len(gaussians) == 1:
+        return gaussians[0]
+    mean, turn = np.array(gaussians[0][0], dtype=float), gaussians[0][1]
+    for _ in range(iterations):
+        information, weighted = 0.0, 0.0
+        for other_mean, other_turn, covariance in gaussians:
+            deviation = other_mean - mean
+            deviation[block.rotation] = rotations.log_map(turn, other_turn)
+            transport = np.eye(len(mean))
+            transport[block.rotation, block.rotation] = rotations.transport(other_turn, turn)
+            precision = np.linalg.inv(transport @ covariance @ transport.T)
+            information, weighted = information + precision, weighted + precision @ deviation
+        step = np.linalg.solve(information, weighted)
+        mean = mean + step
+        turn = rotations.exp_map(turn, step[block.rotation])
+        if np.linalg.norm(step) < 1e-12:
+            break
+    covariance = np.linalg.inv(information)
+    return mean, turn, (covariance + covariance.T) / 2
 
 
 def _product(means: list[np.ndarray], covars: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:

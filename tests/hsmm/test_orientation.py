@@ -11,6 +11,7 @@ from stl_lfd import rotations
 from stl_lfd.errors import SignalError
 from stl_lfd.hsmm import learn, learn_from_folder, load_model, retrieve, save_model
 from stl_lfd.hsmm.demos import with_checked_orientation
+from stl_lfd.poses import Pose
 from stl_lfd.rotations import QUATERNION_COLUMNS
 from stl_lfd.signals import SignalTable, read_signal_csv, write_signal_csv
 from tests.hsmm.pose_demos import pose_demos, write_pose_demos
@@ -146,3 +147,57 @@ def test_more_em_starts_never_lose_likelihood():
     single = HSMM(5).fit(X, lengths, 0.02, names)
     three = HSMM(5, n_init=3).fit(X, lengths, 0.02, names)
     assert three.monitor_.history[-1] >= single.monitor_.history[-1]
+
+
+def moved(demo: SignalTable, pose: Pose) -> SignalTable:
+    """`demo` (positions and orientations) moved by the rigid motion `pose`."""
+    positions = np.column_stack([demo.columns[name] for name in "xyz"]) @ pose.rotation.T + np.array(pose.position)
+    quaternions = rotations.multiply(pose.orientation, np.column_stack([demo.columns[name] for name in QUATERNION_COLUMNS]))
+    return SignalTable(demo.times, dict(zip("xyz", positions.T)) | dict(zip(QUATERNION_COLUMNS, quaternions.T)), demo.source)
+
+
+def full_pose(rng: np.random.Generator, spread: float = 0.05, turn: float = 0.3) -> Pose:
+    return Pose(tuple(rng.normal(0.0, spread, 3)), quaternion=tuple(Rotation.from_rotvec(rng.normal(0.0, turn, 3)).as_quat()))
+
+
+@pytest.fixture(scope="module")
+def object_demos():
+    """Pose demonstrations relative to an object, each with the object at another full 3-D pose."""
+    rng = np.random.default_rng(0)
+    local = [with_checked_orientation(demo) for demo in pose_demos(count=6)]
+    poses = [full_pose(rng) for _ in local]
+    return local, [moved(demo, pose) for demo, pose in zip(local, poses)], poses
+
+
+def test_a_pose_skill_in_an_objects_frame_follows_the_object_in_position_and_orientation(object_demos):
+    local, demos, poses = object_demos
+    model, _ = learn(demos, 5, poses=[{"cup": pose} for pose in poses], frames=["cup"])
+    assert model.feature_names == ["cup.x", "cup.y", "cup.z", "cup.rx", "cup.ry", "cup.rz"] and model.orientation.shape == (1, 4)
+    new = full_pose(np.random.default_rng(7))
+    at_new, in_object = retrieve(model, poses={"cup": new}, rate=100), retrieve(learn(local, 5)[0], rate=100)
+    assert np.max(np.abs(at_new.positions[:, :3] - (in_object.positions[:, :3] @ new.rotation.T + np.array(new.position)))) < 1e-5
+    assert np.max(angle(rotations.multiply(new.orientation, in_object.orientations), at_new.orientations)) < 1e-4
+
+
+def test_moving_demonstrations_and_frames_rigidly_leaves_the_frame_local_model_and_moves_the_retrieved_poses(object_demos):
+    _, demos, poses = object_demos
+    model, _ = learn(demos, 5, poses=[{"cup": pose} for pose in poses], frames=["cup"])
+    motion = Pose((0.1, -0.2, 0.05), quaternion=tuple(Rotation.from_rotvec([0.5, -0.9, 1.3]).as_quat()))
+    moved_model, _ = learn([moved(demo, motion) for demo in demos], 5, poses=[{"cup": motion.compose(pose)} for pose in poses], frames=["cup"])
+    assert np.max(np.abs(moved_model.means_ - model.means_)) < 1e-9 and np.max(np.abs(moved_model.covars_ - model.covars_)) < 1e-9
+    new = full_pose(np.random.default_rng(7))
+    original, transformed = retrieve(model, poses={"cup": new}, rate=100), retrieve(moved_model, poses={"cup": motion.compose(new)}, rate=100)
+    assert np.max(np.abs(original.positions[:, :3] @ motion.rotation.T + np.array(motion.position) - transformed.positions[:, :3])) < 1e-6
+    assert np.max(angle(rotations.multiply(motion.orientation, original.orientations), transformed.orientations)) < 1e-6
+
+
+def test_frames_and_the_base_multiply_on_the_sphere_and_the_model_file_keeps_every_frames_reference(object_demos, tmp_path):
+    _, demos, poses = object_demos
+    model, _ = learn(demos, 5, poses=[{"cup": pose} for pose in poses], frames=["base", "cup"])
+    assert model.orientation.shape == (2, 4)
+    save_model(model, tmp_path / "tp.npz")
+    again = load_model(tmp_path / "tp.npz")
+    new = {"cup": full_pose(np.random.default_rng(3))}
+    assert np.array_equal(retrieve(again, poses=new, rate=50).orientations, retrieve(model, poses=new, rate=50).orientations)
+    trajectory = retrieve(model, poses=new, rate=240)
+    assert np.max(angle(trajectory.orientations[:-1], trajectory.orientations[1:])) < np.radians(1)  # continuous
