@@ -153,3 +153,8 @@ def tilt(q: np.ndarray) -> np.ndarray:
     """The angle (rad) between the hand's approach axis (its local z) and straight down."""
     approach = to_matrix(q)[..., :, 2]
     return np.arccos(np.clip(-approach[..., 2], -1.0, 1.0))
+
+
+def uprightness(q: np.ndarray) -> np.ndarray:
+    """The angle (rad) between a frame's z axis and straight up (0 for an upright object)."""
+    return np.arccos(np.clip(to_matrix(q)[..., 2, 2], -1.0, 1.0))

@@ -39,6 +39,7 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
         ("transitions", "Transition graph before and after optimisation", figures.transition_graphs(run)),
         ("durations", "Duration means per state per trial", figures.durations_per_trial(run)),
         ("forces", "Contact force per trial", figures.contact_forces(run)),
+        ("tilt", "The hand's tilt (angle between its approach axis and straight down) per trial", figures.tilt(run)),
     ]
     if compare:
         runs = [run] + others

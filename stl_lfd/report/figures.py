@@ -8,12 +8,15 @@ from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrowPatch, Rectangle
 
+import stl_lfd.rotations as rotations
 from stl_lfd.hsmm import HSMM
 from stl_lfd.report.run_data import RunData, signed_distance
+from stl_lfd.rotations import QUATERNION_COLUMNS
 
 BEST = "tab:red"
 INITIAL = "0.2"
 REGION_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
+TURNING = np.radians(1.0)  # a hand tilted less than this throughout points down: nothing to show
 
 
 def _trial_colors(count: int) -> list[tuple]:
@@ -40,7 +43,39 @@ def trajectories(run: RunData) -> Figure:
     if run.best is not None and run.best.trial in run.signals:
         best = run.signals[run.best.trial]
         axes.plot(best.columns["x"], best.columns["y"], color=BEST, lw=2.2, label=f"best (trial {run.best.trial})")
+        _approach_axes(axes, best)
     axes.set(xlabel="x (m)", ylabel="y (m)", title=f"{run.task.name}: end-effector paths of {len(numbers)} trials", aspect="equal")
+    axes.legend(loc="best")
+    return figure
+
+
+def _approach_axes(axes, table, count: int = 12, length: float = 0.03) -> None:
+    """Arrows along a path that turns the hand: its approach axis (the gripper's z) at `count`
+    instants, projected on the x-y plane."""
+    if not set(QUATERNION_COLUMNS) <= set(table.columns) or "tilt" not in table.columns or np.max(table.columns["tilt"]) < TURNING:
+        return
+    at = np.linspace(0, table.samples - 1, count).astype(int)
+    approach = rotations.to_matrix(np.column_stack([table.columns[name][at] for name in QUATERNION_COLUMNS]))[:, :, 2]
+    x, y = table.columns["x"][at], table.columns["y"][at]
+    axes.quiver(x, y, approach[:, 0], approach[:, 1], color="black", angles="xy", scale_units="xy", scale=1 / length, width=0.006, label="approach axis (best)")
+
+
+def tilt(run: RunData) -> Figure | None:
+    """The hand's tilt (angle between its approach axis and straight down) over time for every
+    trial, when some trial turned the hand by more than a degree."""
+    tables = {number: table for number, table in run.signals.items() if "tilt" in table.columns}
+    if not tables or not any(np.max(table.columns["tilt"]) > TURNING for table in tables.values()):
+        return None
+    figure = Figure(figsize=(8, 4), layout="constrained")
+    axes = figure.subplots()
+    numbers = [number for number in tables if number > 0]
+    for color, number in zip(_trial_colors(len(numbers)), numbers):
+        axes.plot(tables[number].times, np.degrees(tables[number].columns["tilt"]), color=color, lw=1)
+    if 0 in tables:
+        axes.plot(tables[0].times, np.degrees(tables[0].columns["tilt"]), color=INITIAL, ls="--", label="unoptimised")
+    if run.best is not None and run.best.trial in tables:
+        axes.plot(tables[run.best.trial].times, np.degrees(tables[run.best.trial].columns["tilt"]), color=BEST, lw=2, label="best")
+    axes.set(xlabel="t (s)", ylabel="tilt (degrees from straight down)", title="the hand's tilt per trial")
     axes.legend(loc="best")
     return figure
 

@@ -112,6 +112,7 @@ class PandaWorld:
         self.held: tuple[int, int] | None = None  # (object body, constraint)
         # Frame origins: fixed ones once; moving ones as (row, body, origin in the body's frame).
         self._frame_positions = np.array([frame.pose.position for frame in scene.frames], dtype=float).reshape(-1, 3)
+        self._frame_orientations = np.array([frame.pose.orientation for frame in scene.frames], dtype=float).reshape(-1, 4)
         self._moving_frames = [(index, *anchor) for index, frame in enumerate(scene.frames) if (anchor := self._anchor(frame)) is not None]
         for region in scene.regions:
             self._add_region(region)
@@ -141,9 +142,10 @@ class PandaWorld:
         client.changeDynamics(body, -1, lateralFriction=item.friction)
         return body
 
-    def _anchor(self, frame: SceneFrame) -> tuple[int, tuple[float, float, float] | None] | None:
-        """None for a fixed frame; for one that moves with its first movable object, that body
-        and the frame's origin in the body's frame (None when it is the body's origin)."""
+    def _anchor(self, frame: SceneFrame) -> tuple[int, tuple[float, float, float] | None, np.ndarray] | None:
+        """None for a fixed frame; for one that moves with its first movable object, that body,
+        the frame's origin in the body's frame (None when it is the body's origin) and the
+        frame's orientation relative to the body's."""
         masses = {item.name: item.mass for item in self.scene.objects}
         movable = [name for name in frame.objects if masses[name] > 0]
         if not movable:
@@ -152,15 +154,21 @@ class PandaWorld:
         position, orientation = self.client.getBasePositionAndOrientation(body)
         inverse = self.client.invertTransform(position, orientation)
         local, _ = self.client.multiplyTransforms(inverse[0], inverse[1], frame.pose.position, (0.0, 0.0, 0.0, 1.0))
-        return body, (None if max(abs(value) for value in local) < 1e-12 else local)
+        turned = rotations.multiply(rotations.conjugate(np.array(orientation)), frame.pose.orientation)
+        return body, (None if max(abs(value) for value in local) < 1e-12 else local), turned
 
     def frame_positions(self) -> np.ndarray:
         """`F x 3` positions of the scene's frames now (a grasped shaft's frame moves with it)."""
-        positions = self._frame_positions.copy()
-        for index, body, local in self._moving_frames:
+        return self.frame_poses()[0]
+
+    def frame_poses(self) -> tuple[np.ndarray, np.ndarray]:
+        """`F x 3` positions and `F x 4` orientations of the scene's frames now."""
+        positions, orientations = self._frame_positions.copy(), self._frame_orientations.copy()
+        for index, body, local, turned in self._moving_frames:
             position, orientation = self.client.getBasePositionAndOrientation(body)
             positions[index] = position if local is None else self.client.multiplyTransforms(position, orientation, local, (0.0, 0.0, 0.0, 1.0))[0]
-        return positions
+            orientations[index] = rotations.multiply(np.array(orientation), turned)
+        return positions, orientations
 
     def _add_region(self, region: Region) -> int:
         lower, upper = np.array(region.lower), np.array(region.upper)
@@ -329,10 +337,11 @@ class PyBulletBackend:
         fingers = np.empty(steps + 1)
         forces = np.empty(steps + 1)
         frames = np.empty((steps + 1, len(scene.frames), 3))
+        frame_tilts = np.empty((steps + 1, len(scene.frames)))
         world.reset(targets[0], openings[0], turns[0])
         events = list(reference.events)
         (positions[0], orientations[0]), fingers[0], forces[0] = world.end_effector_pose(), world.gripper_opening(), world.contact_force()
-        frames[0] = world.frame_positions()
+        frames[0], frame_tilts[0] = _positions_and_tilts(world)
         if observer is not None:
             observer(0.0, world)
         for step in range(1, steps + 1):
@@ -342,13 +351,13 @@ class PyBulletBackend:
             world.command(targets[step], openings[step], turns[step])
             world.step()
             (positions[step], orientations[step]), fingers[step], forces[step] = world.end_effector_pose(), world.gripper_opening(), world.contact_force()
-            frames[step] = world.frame_positions()
+            frames[step], frame_tilts[step] = _positions_and_tilts(world)
             if observer is not None:
                 observer(step_times[step], world)
         if not np.isfinite(positions).all():
             raise ExecutionError("rollout: the simulation diverged (non-finite end-effector positions)")
         forces = low_pass(forces, scene.force_filter_hz, TIME_STEP)
-        return _record(step_times, positions, rotations.continuous(orientations), fingers, forces, frames, scene, reference, rate)
+        return _record(step_times, positions, rotations.continuous(orientations), fingers, forces, (frames, frame_tilts), scene, reference, rate)
 
     def close(self) -> None:
         for world in self._worlds.values():
@@ -360,6 +369,13 @@ class PyBulletBackend:
 
     def __exit__(self, *exception: object) -> None:
         self.close()
+
+
+def _positions_and_tilts(world: PandaWorld) -> tuple[np.ndarray, np.ndarray]:
+    """The frames' positions and their tilts (rad, the angle between a frame's z axis and
+    straight up: 0 for an upright shaft)."""
+    positions, orientations = world.frame_poses()
+    return positions, rotations.uprightness(orientations)
 
 
 def _distance_to_shape(shape: tuple, point: np.ndarray) -> float:
@@ -407,9 +423,12 @@ def _record(step_times, positions, orientations, fingers, forces, frames, scene:
     turned /= np.linalg.norm(turned, axis=1, keepdims=True)
     columns.update(zip(QUATERNION_COLUMNS, turned.T))
     columns["tilt"] = rotations.tilt(turned)
+    frames, frame_tilts = frames
     for index, frame in enumerate(scene.frames):
         for axis, name in enumerate(frame.signals):
             columns[name] = np.interp(times, step_times, frames[:, index, axis])
+    for index, frame in enumerate(scene.frames):
+        columns[frame.tilt_signal] = np.interp(times, step_times, frame_tilts[:, index])
     error = np.linalg.norm(recorded - reference.positions_at(times), axis=1)
     return Rollout(SignalTable(times, columns, source="pybullet rollout"), error)
 

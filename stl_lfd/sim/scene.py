@@ -70,7 +70,8 @@ class SceneFrame:
     """A named object pose that skills refer to (a TP-HSMM frame) and that can be placed.
 
     Attributes:
-        name: the frame's name (`shaft`); rollouts record its origin as `NAME_x, NAME_y, NAME_z`.
+        name: the frame's name (`shaft`); rollouts record its origin as `NAME_x, NAME_y, NAME_z`
+            and the angle between its z axis and straight up as `NAME_tilt`.
         pose: where the frame is (position in metres, yaw in radians about z).
         objects: the scene objects that move with it, rigidly.
         area: `(lower, upper)` x-y corners the frame's position may be placed in, or None.
@@ -84,6 +85,11 @@ class SceneFrame:
     @property
     def signals(self) -> tuple[str, str, str]:
         return (f"{self.name}_x", f"{self.name}_y", f"{self.name}_z")
+
+    @property
+    def tilt_signal(self) -> str:
+        """The recorded angle (rad) between the frame's z axis and straight up."""
+        return f"{self.name}_tilt"
 
 
 @dataclass(frozen=True)
@@ -140,8 +146,9 @@ class Scene:
 
     @property
     def recorded_signals(self) -> tuple[str, ...]:
-        """What a rollout in this scene records: `RECORDED_SIGNALS` and each frame's position."""
-        return RECORDED_SIGNALS + tuple(signal for frame in self.frames for signal in frame.signals)
+        """What a rollout in this scene records: `RECORDED_SIGNALS`, each frame's position, then
+        each frame's tilt."""
+        return RECORDED_SIGNALS + tuple(signal for frame in self.frames for signal in frame.signals) + tuple(frame.tilt_signal for frame in self.frames)
 
     def placement_from_options(self, texts: list[str], option: str = "--place") -> dict[str, Pose]:
         """Frame name -> pose from `NAME=x,y[,z[,yaw]]` texts (z and yaw default to the frame's)."""

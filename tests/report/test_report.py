@@ -50,6 +50,7 @@ def test_report_writes_every_figure_and_an_index(run_dir, tmp_path):
         assert f'src="{name}.png"' in page
     assert "best robustness" in page and "phi2.stl" in page
     assert not (out / "forces.png").exists()  # the kinematic backend touches nothing
+    assert not (out / "tilt.png").exists()  # a skill without orientation points the hand down throughout
 
 
 @pytest.mark.slow
@@ -90,3 +91,14 @@ def test_report_of_a_behaviour_run_draws_each_skill(tmp_path):
         assert_picture(tmp_path / "report" / f"{name}.png")
     page = (tmp_path / "report" / "index.html").read_text()
     assert "pick.duration[1]" in page and "insert.mean[5+6].holder.x" in page
+
+
+@pytest.mark.slow
+def test_a_run_that_turns_the_hand_draws_its_tilt_and_approach_axis(tmp_path):
+    folder = tmp_path / "turn"
+    task = load_task(ROOT / "configs" / "turn.yaml").with_overrides(initial=2, trials=3)
+    finish_run(start_run(task, folder))
+    result = runner.invoke(app, ["report", str(folder)])
+    assert result.exit_code == 0, result.stderr
+    assert_picture(folder / "report" / "tilt.png")
+    assert 'src="tilt.png"' in (folder / "report" / "index.html").read_text()

@@ -75,7 +75,7 @@ def test_placing_a_frame_moves_its_objects_rigidly():
         else:
             assert item == before[item.name]
     assert placed.frame_poses["holder"] == Pose((0.6, 0.1, 0.04), 0.5)
-    assert placed.recorded_signals[-6:] == ("shaft_x", "shaft_y", "shaft_z", "holder_x", "holder_y", "holder_z")
+    assert placed.recorded_signals[-8:] == ("shaft_x", "shaft_y", "shaft_z", "holder_x", "holder_y", "holder_z", "shaft_tilt", "holder_tilt")
 
 
 def test_placements_outside_the_table_or_of_unknown_frames_are_refused():
