@@ -103,7 +103,7 @@ def search_page(search: Path = SEARCH_RESULTS) -> str:
         f"Generated from `{name}` by `python -m benchmarks.results_pages`. Each row is one search "
         "(`python -m benchmarks.bench_suite --search N`): N uniform random points of the problem's box, the best robustness "
         "among them and the fraction that satisfy the spec; `directed` searches were placed where the problem's structure "
-        "says the solutions are. A problem has a solution shown when some search found a satisfying point.",
+        "says the solutions are. A problem has a solution shown when its latest search (the last record of the problem in search.jsonl) found a satisfying point.",
         "",
         "| problem | best robustness (satisfying points) |",
         "|---|---|",

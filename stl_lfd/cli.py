@@ -282,7 +282,8 @@ def rollout(
     place: list[str] = typer.Option([], "--place", help=PLACE_HELP),
 ) -> None:
     """Execute a skill model or a behaviour once and write the recorded signals
-    (t,x,y,z,gripper,force, and NAME_x,NAME_y,NAME_z for each object frame of the scene).
+    (t,x,y,z,gripper,force,qx,qy,qz,qw,tilt, then NAME_x,NAME_y,NAME_z and NAME_tilt for each
+    object frame of the scene).
 
     Examples:
 
