@@ -28,10 +28,16 @@ from stl_lfd.poses import BASE_FRAME, Pose
 from stl_lfd.rotations import QUATERNION_COLUMNS
 
 POSITION_SIGNALS = ("x", "y", "z")
+RELEVANCE = 10.0  # see `relevant_frames`
 
 
 class TPHSMM(HSMM):
     """An HSMM whose states are Gaussians in P frames at once.
+
+    Hyperparameters (besides those of `HSMM`):
+        relevance: a state's Gaussian in a frame enters the product only when its position's
+            geometric-mean variance is at most `relevance` times the smallest over the frames
+            (None: every frame, the classic product). See `relevant_frames` for why.
 
     Learned attributes (besides those of `HSMM`):
         frame_names_: the P frames; `base` is the robot base frame, fixed at the origin.
@@ -42,6 +48,10 @@ class TPHSMM(HSMM):
         orientation_reference_: with orientation, `P x 4`: each frame's mean orientation of the
             hand, which that frame's rotation vectors are relative to.
     """
+
+    def __init__(self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-2, reg_covar: float = 1e-6, n_init: int = 1, relevance: float | None = RELEVANCE) -> None:
+        super().__init__(n_states, n_iter, tol, reg_covar, n_init)
+        self.relevance = relevance
 
     def fit(  # type: ignore[override]
         self,
@@ -100,7 +110,7 @@ class TPHSMM(HSMM):
             block = slice(index * D, (index + 1) * D)
             means.append(local_means[:, block] @ rotation.T + offset)
             covars.append(rotation @ local_covars[:, block, block] @ rotation.T)
-        base_means, base_covars = _product(means, covars)
+        base_means, base_covars = _product(means, covars, self.relevance)
         model = HSMM(self.n_states, self.n_iter, self.tol, self.reg_covar)
         model.means_, model.covars_ = base_means[: self.n_states], base_covars[: self.n_states]
         if end is not None:
@@ -129,7 +139,11 @@ class TPHSMM(HSMM):
             local = rows[:, columns]
             orientations = rotations.multiply(pose.orientation, rotations.exp_map(self.orientation[index], local[:, block.rotation]))
             frames.append((local @ rotation.T + offset, orientations, rotation @ covars[:, columns, columns] @ rotation.T))
-        products = [_manifold_product([(means[row], turns[row], covariances[row]) for means, turns, covariances in frames], block) for row in range(len(rows))]
+        products = []
+        for row in range(len(rows)):
+            gaussians = [(means[row], turns[row], covariances[row]) for means, turns, covariances in frames]
+            kept = relevant_frames([covariance for _, _, covariance in gaussians], self.relevance)
+            products.append(_manifold_product([gaussians[index] for index in kept], block))
         reference = rotations.weighted_mean(np.array([turn for _, turn, _ in products[: self.n_states]]))
         base = np.array(
             [np.concatenate([mean[: block.rotation.start], rotations.log_map(reference, turn), mean[block.rotation.stop :]]) for mean, turn, _ in products]
@@ -232,11 +246,36 @@ def _manifold_product(
     return mean, turn, (covariance + covariance.T) / 2
 
 
-def _product(means: list[np.ndarray], covars: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Product of Gaussians, state by state: `K x D` means and `K x D x D` covariances. One
-    frame is returned as it is, so that a model with the base frame alone is the plain HSMM."""
+def relevant_frames(covariances: list[np.ndarray], relevance: float | None) -> list[int]:
+    """The frames (indices) whose Gaussian enters a state's product: those whose position
+    block (`x, y, z`, the first three columns) has a geometric-mean variance at most
+    `relevance` times the smallest (all of them for None).
+
+    Why: the demonstrations' objects all stand at one height, so every frame sees the vertical
+    spread of the same motion and some frame always looks as certain as the relevant one in
+    that direction, along an axis that is tilted a little by chance. At the insertion's end
+    such a frame (the shaft's original pose, or the base) then pulled the product by up to
+    5 mm in x and y at new placements, although its x-y spread was ten times the holder's.
+    A frame that far less certain than the best one carries no information about the state
+    that the best one lacks."""
+    if relevance is None or len(covariances) == 1:
+        return list(range(len(covariances)))
+    spreads = np.array([max(np.linalg.det(covariance[:3, :3]), 0.0) ** (1 / 3) for covariance in covariances])
+    return [index for index, spread in enumerate(spreads) if spread <= relevance * spreads.min()]
+
+
+def _product(means: list[np.ndarray], covars: list[np.ndarray], relevance: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Product of Gaussians, state by state: `K x D` means and `K x D x D` covariances, each
+    state over its `relevant_frames`. One frame is returned as it is, so that a model with
+    the base frame alone is the plain HSMM."""
     if len(means) == 1:
         return means[0], covars[0]
+    if relevance is not None:
+        products = []
+        for state in range(len(means[0])):
+            kept = relevant_frames([covar[state] for covar in covars], relevance)
+            products.append(_product([means[index][state : state + 1] for index in kept], [covars[index][state : state + 1] for index in kept]))
+        return np.concatenate([mean for mean, _ in products]), np.concatenate([covar for _, covar in products])
     precisions = [np.linalg.inv(covar) for covar in covars]
     covar = np.linalg.inv(np.sum(precisions, axis=0))
     weighted = np.sum([np.einsum("kde,ke->kd", precision, mean) for precision, mean in zip(precisions, means)], axis=0)

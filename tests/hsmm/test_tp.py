@@ -5,6 +5,7 @@ import pytest
 
 from stl_lfd.errors import ConfigError, ModelError
 from stl_lfd.hsmm import HSMM, TPHSMM, frame_poses, learn, learn_from_folder, load_demo_frames, load_demos, load_model, retrieve, save_model
+from stl_lfd.hsmm.tp import relevant_frames
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable, write_signal_csv
 from tests.conftest import ROOT
@@ -154,3 +155,38 @@ def test_models_without_an_end_point_retrieve_as_before(learned_model):
     old.end_offsets_ = None
     trajectory = retrieve(old)
     assert np.linalg.norm(trajectory.positions[-1] - learned_model.means_[-1]) < 0.01
+
+
+def unseen_placements(count: int = 20) -> list[dict[str, Pose]]:
+    """Object poses the insert demonstrations never saw, from a generator seeded for this test
+    alone: the first half inside the demonstrations' x-y range, the second half up to 3 cm
+    beyond it; any holder yaw and any shaft yaw."""
+    poses = load_demo_frames(load_demos(ROOT / "demos" / "insert"))
+    rng = np.random.default_rng(20261203)
+    placements = []
+    for index in range(count):
+        beyond = 0.03 if index >= count // 2 else 0.0
+        drawn = {}
+        for frame, height in (("holder", 0.04), ("shaft", 0.08)):
+            xs, ys = [pose[frame].position[0] for pose in poses], [pose[frame].position[1] for pose in poses]
+            position = (rng.uniform(min(xs) - beyond, max(xs) + beyond), rng.uniform(min(ys) - beyond, max(ys) + beyond), height)
+            drawn[frame] = Pose(position, rng.uniform(-np.pi, np.pi))
+        placements.append(drawn)
+    return placements
+
+
+def test_the_insert_ends_where_it_was_demonstrated_in_the_holders_frame_at_unseen_placements(insert_model):
+    demos = load_demos(ROOT / "demos" / "insert")
+    poses = load_demo_frames(demos)
+    demonstrated = np.mean([pose["holder"].from_base(np.array([[demo.columns[n][-1] for n in "xyz"]]))[0] for demo, pose in zip(demos, poses)], axis=0)
+    errors = [
+        np.linalg.norm(placement["holder"].from_base(retrieve(insert_model, poses=placement).positions[-1:])[0] - demonstrated)
+        for placement in unseen_placements()
+    ]
+    assert max(errors) < 0.002
+
+
+def test_a_frame_far_less_certain_than_the_best_is_left_out_of_a_states_product():
+    tight, loose, middle = np.eye(3) * 1e-6, np.eye(3) * 1e-3, np.eye(3) * 5e-6
+    assert relevant_frames([tight, loose, middle], 10.0) == [0, 2]
+    assert relevant_frames([tight, loose, middle], None) == [0, 1, 2]
