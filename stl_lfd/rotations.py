@@ -156,5 +156,12 @@ def tilt(q: np.ndarray) -> np.ndarray:
 
 
 def uprightness(q: np.ndarray) -> np.ndarray:
-    """The angle (rad) between a frame's z axis and straight up (0 for an upright object)."""
-    return np.arccos(np.clip(to_matrix(q)[..., 2, 2], -1.0, 1.0))
+    """The angle (rad, 0 to pi/2) between an object's z axis and the vertical, either way up: a
+    cylinder's axis has no direction (0 for an upright shaft, pi/2 for a lying one)."""
+    return np.arccos(np.clip(np.abs(to_matrix(q)[..., 2, 2]), 0.0, 1.0))
+
+
+def from_euler(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """The quaternion of roll, pitch and yaw (rad) as PyBullet and scenes give them: about x,
+    then y, then z, all fixed axes."""
+    return multiply(from_rotvec([0.0, 0.0, yaw]), multiply(from_rotvec([0.0, pitch, 0.0]), from_rotvec([roll, 0.0, 0.0])))

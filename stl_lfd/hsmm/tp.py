@@ -49,7 +49,9 @@ class TPHSMM(HSMM):
             hand, which that frame's rotation vectors are relative to.
     """
 
-    def __init__(self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-2, reg_covar: float = 1e-6, n_init: int = 1, relevance: float | None = RELEVANCE) -> None:
+    def __init__(
+        self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-2, reg_covar: float = 1e-6, n_init: int = 1, relevance: float | None = RELEVANCE
+    ) -> None:
         super().__init__(n_states, n_iter, tol, reg_covar, n_init)
         self.relevance = relevance
 

@@ -39,7 +39,7 @@ class KinematicBackend:
             for value, name in zip(frame.pose.position, frame.signals):
                 columns[name] = np.full(times.size, float(value))
         for frame in scene.frames:
-            columns[frame.tilt_signal] = np.full(times.size, float(rotations.uprightness(frame.pose.orientation)))
+            columns[frame.tilt_signal] = np.full(times.size, float(rotations.uprightness(scene.frame_object_orientation(frame))))
         return Rollout(SignalTable(times, columns, source="kinematic rollout"), np.zeros(times.size))
 
     def close(self) -> None:

@@ -112,7 +112,7 @@ class PandaWorld:
         self.held: tuple[int, int] | None = None  # (object body, constraint)
         # Frame origins: fixed ones once; moving ones as (row, body, origin in the body's frame).
         self._frame_positions = np.array([frame.pose.position for frame in scene.frames], dtype=float).reshape(-1, 3)
-        self._frame_orientations = np.array([frame.pose.orientation for frame in scene.frames], dtype=float).reshape(-1, 4)
+        self._object_orientations = np.array([scene.frame_object_orientation(frame) for frame in scene.frames], dtype=float).reshape(-1, 4)
         self._moving_frames = [(index, *anchor) for index, frame in enumerate(scene.frames) if (anchor := self._anchor(frame)) is not None]
         for region in scene.regions:
             self._add_region(region)
@@ -142,10 +142,9 @@ class PandaWorld:
         client.changeDynamics(body, -1, lateralFriction=item.friction)
         return body
 
-    def _anchor(self, frame: SceneFrame) -> tuple[int, tuple[float, float, float] | None, np.ndarray] | None:
-        """None for a fixed frame; for one that moves with its first movable object, that body,
-        the frame's origin in the body's frame (None when it is the body's origin) and the
-        frame's orientation relative to the body's."""
+    def _anchor(self, frame: SceneFrame) -> tuple[int, tuple[float, float, float] | None] | None:
+        """None for a fixed frame; for one that moves with its first movable object, that body
+        and the frame's origin in the body's frame (None when it is the body's origin)."""
         masses = {item.name: item.mass for item in self.scene.objects}
         movable = [name for name in frame.objects if masses[name] > 0]
         if not movable:
@@ -154,20 +153,20 @@ class PandaWorld:
         position, orientation = self.client.getBasePositionAndOrientation(body)
         inverse = self.client.invertTransform(position, orientation)
         local, _ = self.client.multiplyTransforms(inverse[0], inverse[1], frame.pose.position, (0.0, 0.0, 0.0, 1.0))
-        turned = rotations.multiply(rotations.conjugate(np.array(orientation)), frame.pose.orientation)
-        return body, (None if max(abs(value) for value in local) < 1e-12 else local), turned
+        return body, (None if max(abs(value) for value in local) < 1e-12 else local)
 
     def frame_positions(self) -> np.ndarray:
         """`F x 3` positions of the scene's frames now (a grasped shaft's frame moves with it)."""
         return self.frame_poses()[0]
 
     def frame_poses(self) -> tuple[np.ndarray, np.ndarray]:
-        """`F x 3` positions and `F x 4` orientations of the scene's frames now."""
-        positions, orientations = self._frame_positions.copy(), self._frame_orientations.copy()
-        for index, body, local, turned in self._moving_frames:
+        """`F x 3` positions of the scene's frames now, and `F x 4` orientations of their first
+        objects (a grasped shaft's frame and orientation move with it)."""
+        positions, orientations = self._frame_positions.copy(), self._object_orientations.copy()
+        for index, body, local in self._moving_frames:
             position, orientation = self.client.getBasePositionAndOrientation(body)
             positions[index] = position if local is None else self.client.multiplyTransforms(position, orientation, local, (0.0, 0.0, 0.0, 1.0))[0]
-            orientations[index] = rotations.multiply(np.array(orientation), turned)
+            orientations[index] = orientation
         return positions, orientations
 
     def _add_region(self, region: Region) -> int:
@@ -372,8 +371,8 @@ class PyBulletBackend:
 
 
 def _positions_and_tilts(world: PandaWorld) -> tuple[np.ndarray, np.ndarray]:
-    """The frames' positions and their tilts (rad, the angle between a frame's z axis and
-    straight up: 0 for an upright shaft)."""
+    """The frames' positions and their objects' tilts (rad, the angle between the first
+    object's own z axis, a cylinder's axis, and straight up: 0 for an upright shaft)."""
     positions, orientations = world.frame_poses()
     return positions, rotations.uprightness(orientations)
 

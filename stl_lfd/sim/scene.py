@@ -15,6 +15,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+import stl_lfd.rotations as rotations
 from stl_lfd.choices import RECORDED_SIGNALS
 from stl_lfd.errors import ConfigError
 from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment, parse_pose, pose_from_values
@@ -71,7 +72,8 @@ class SceneFrame:
 
     Attributes:
         name: the frame's name (`shaft`); rollouts record its origin as `NAME_x, NAME_y, NAME_z`
-            and the angle between its z axis and straight up as `NAME_tilt`.
+            and the angle between its first object's z axis (a cylinder's axis) and the
+            vertical as `NAME_tilt` (0 to pi/2: an axis has no direction).
         pose: where the frame is (position in metres, yaw in radians about z).
         objects: the scene objects that move with it, rigidly.
         area: `(lower, upper)` x-y corners the frame's position may be placed in, or None.
@@ -88,7 +90,8 @@ class SceneFrame:
 
     @property
     def tilt_signal(self) -> str:
-        """The recorded angle (rad) between the frame's z axis and straight up."""
+        """The recorded angle (rad, 0 to pi/2) between the z axis of the frame's first object (a
+        cylinder's axis) and the vertical."""
         return f"{self.name}_tilt"
 
 
@@ -193,6 +196,14 @@ class Scene:
             if not pose.turns_about_z_only:
                 raise ConfigError(f"{source}: {name}: a scene turns its objects about z only; give a yaw, not an orientation")
             _check_area(frames[name], pose, source)
+
+    def frame_object_orientation(self, frame: SceneFrame) -> np.ndarray:
+        """The orientation (quaternion) of the frame's first object, or of the frame itself when
+        it has none."""
+        objects = {item.name: item for item in self.objects}
+        if not frame.objects:
+            return frame.pose.orientation
+        return rotations.from_euler(*objects[frame.objects[0]].orientation)
 
     def place(self, placements: Mapping[str, Pose], source: str = "--place") -> "Scene":
         """A copy with frames moved to `placements` (name -> pose), their objects with them;
