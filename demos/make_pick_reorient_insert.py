@@ -7,7 +7,8 @@ the hand turns about the vertical so that its fingers close across the shaft, th
 grasp pose at the shaft's centre. Sidecar: the shaft's pose.
 reorient_insert: from the grasp pose, lift, carry towards the holder while turning the hand a
 quarter turn about the horizontal axis across the shaft (the shaft comes upright, the hand
-points sideways), hover over the hole, lower the shaft into it and stop. Sidecar: the poses of
+points sideways) and to the same heading relative to the holder every time, hover over the
+hole, lower the shaft into it and stop. Sidecar: the poses of
 the shaft (where it was grasped) and of the holder.
 
 Placements: demonstration i moves the shaft and the holder from the scene's default poses by
@@ -126,7 +127,8 @@ def reorient_insert(rng: np.random.Generator, poses: dict[str, Pose], shift: flo
     lifted = in_base(shaft, [0.0, 0.0, 0.12], GRASPING)
     # People neither turn by the same angle nor stop at the same point twice: this spread sets
     # the bounds of the insertion's optimisation.
-    upright = rotations.multiply(shaft.orientation, turned(turn_degrees + rng.normal(0, TURN_SPREAD_DEG)))  # the turn keeps the hand's heading
+    # The hand ends facing the holder as always (its heading relative to the holder), the shaft upright.
+    upright = rotations.multiply(holder.orientation, turned(turn_degrees + rng.normal(0, TURN_SPREAD_DEG)))
     off = np.append(rng.normal(0, STOP_SPREAD_M, 2) + [shift, 0.0], HOLE_BOTTOM_IN_HOLDER + SHAFT_HALF_LENGTH)
     stop = holder.to_base(off[None])[0] + rng.normal(0, 0.0005, 3)
     hover = stop + [0.0, 0.0, 0.10] + rng.normal(0, 0.002, 3) * [1, 1, 0.3]
