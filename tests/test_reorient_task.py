@@ -33,3 +33,12 @@ def test_the_behaviour_inserts_the_upright_shaft_unless_demonstrated_off_the_hol
     assert (SPEC.robustness(signals.columns, signals.times, semantics="classic") > 0) == satisfied
     end = {name: values[-1] for name, values in signals.columns.items()}
     assert end["shaft_z"] < 0.12 and np.degrees(end["shaft_tilt"]) < (3 if satisfied else 10)  # in the hole either way, upright or not quite
+
+
+def test_the_kinematic_backend_carries_the_grasped_shaft_so_plans_see_it_turn():
+    skill = PlacedSkill.load(ROOT / "configs" / "behaviours" / "pick_reorient_insert.yaml", duration=36.0)
+    signals = skill.execute("kinematic", 20).signals
+    tilt, x, z = signals.columns["shaft_tilt"], signals.columns["shaft_x"], signals.columns["shaft_z"]
+    assert np.degrees(tilt[0]) == pytest.approx(90.0) and np.degrees(tilt[-1]) < 3.0  # lying, then upright
+    assert x[0] == pytest.approx(0.45) and abs(x[-1] - signals.columns["holder_x"][-1]) < 0.003 and z[-1] < 0.1
+    assert SPEC.robustness(signals.columns, signals.times, semantics="classic") > 0

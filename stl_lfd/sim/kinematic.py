@@ -1,8 +1,10 @@
 """The kinematic backend: the reference itself is the recorded signal.
 
-Instant and exact, for tests and quick studies. Nothing can be touched, so `force` is 0, and
-the scene's objects stay where they were placed: their frames' positions are constant, even
-while grasped.
+Instant and exact, for tests, quick studies and method `plan`'s plans. Nothing can be touched,
+so `force` is 0. A grasp (a reference event) takes the movable object nearest the hand, if one
+is within the scene's grasp distance, as the PyBullet backend does: from then until the
+release, the frames that move with that object follow the hand rigidly (their positions and
+tilts are recorded so); nothing falls.
 """
 
 from __future__ import annotations
@@ -35,11 +37,11 @@ class KinematicBackend:
         orientations = reference.orientations_at(times)
         columns.update(zip(QUATERNION_COLUMNS, orientations.T))
         columns["tilt"] = rotations.tilt(orientations)
-        for frame in scene.frames:
-            for value, name in zip(frame.pose.position, frame.signals):
-                columns[name] = np.full(times.size, float(value))
-        for frame in scene.frames:
-            columns[frame.tilt_signal] = np.full(times.size, float(rotations.uprightness(scene.frame_object_orientation(frame))))
+        frame_positions, frame_orientations = carried_frames(reference, scene, times, positions, orientations)
+        for index, frame in enumerate(scene.frames):
+            columns.update(zip(frame.signals, frame_positions[:, index].T))
+        for index, frame in enumerate(scene.frames):
+            columns[frame.tilt_signal] = rotations.uprightness(frame_orientations[:, index])
         return Rollout(SignalTable(times, columns, source="kinematic rollout"), np.zeros(times.size))
 
     def close(self) -> None:
@@ -50,3 +52,44 @@ class KinematicBackend:
 
     def __exit__(self, *exception: object) -> None:
         self.close()
+
+
+def carried_frames(reference: Reference, scene: Scene, times: np.ndarray, positions: np.ndarray, orientations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`T x F x 3` positions of the scene's frames and `T x F x 4` orientations of their first
+    objects at `times`, while the hand (`T x 3` positions, `T x 4` orientations) grasps and
+    releases as the reference's events say."""
+    frame_positions = np.tile(np.array([frame.pose.position for frame in scene.frames], dtype=float).reshape(1, -1, 3), (len(times), 1, 1))
+    frame_orientations = np.tile(np.array([scene.frame_object_orientation(frame) for frame in scene.frames]).reshape(1, -1, 4), (len(times), 1, 1))
+    objects = {item.name: item for item in scene.objects}
+    held: list[int] = []  # the frames moving with the grasped object
+    start = 0
+    for time, action in list(reference.events) + [(np.inf, "release")]:
+        step = int(np.searchsorted(times, time - 1e-9))
+        if held:  # carried from `start` to `step`: rigidly with the hand
+            hand = orientations[start]
+            for index in held:
+                local = rotations.rotate(rotations.conjugate(hand), frame_positions[start, index] - positions[start])
+                turned = rotations.multiply(rotations.conjugate(hand), frame_orientations[start, index])
+                frame_positions[start:, index] = positions[start:] + rotations.rotate(orientations[start:], np.tile(local, (len(times) - start, 1)))
+                frame_orientations[start:, index] = rotations.multiply(orientations[start:], turned)
+            held = []
+        if action == "grasp" and step < len(times):
+            held = _grasped(scene, objects, positions[step], frame_positions[step], frame_orientations[step])
+            start = step
+    return frame_positions, frame_orientations
+
+
+def _grasped(scene: Scene, objects: dict, hand: np.ndarray, frame_positions: np.ndarray, frame_orientations: np.ndarray) -> list[int]:
+    """The frames that move with the movable object nearest `hand` within the grasp distance
+    (none when there is none), the frames at the given poses now."""
+    reach = []
+    for index, frame in enumerate(scene.frames):
+        movable = [objects[name] for name in frame.objects if objects[name].mass > 0]
+        if movable:
+            offset = frame_positions[index] - np.asarray(frame.pose.position)  # where the frame has moved
+            turned = rotations.multiply(frame_orientations[index], rotations.conjugate(scene.frame_object_orientation(frame)))
+            item = movable[0]
+            position = np.asarray(frame.pose.position) + offset + rotations.rotate(turned, np.asarray(item.position) - np.asarray(frame.pose.position))
+            reach.append((item.distance(hand, position, rotations.multiply(turned, rotations.from_euler(*item.orientation))), index))
+    reach = [(distance, index) for distance, index in reach if distance <= scene.grasp_distance]
+    return [min(reach)[1]] if reach else []

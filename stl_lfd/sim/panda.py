@@ -109,6 +109,7 @@ class PandaWorld:
         self.robot = client.loadURDF("franka_panda/panda.urdf", useFixedBase=True)
         self.objects = {item.name: self._add_object(item) for item in scene.objects}
         self.movable = [self.objects[item.name] for item in scene.objects if item.mass > 0]
+        self._items = {self.objects[item.name]: item for item in scene.objects}
         self.held: tuple[int, int] | None = None  # (object body, constraint)
         # Frame origins: fixed ones once; moving ones as (row, body, origin in the body's frame).
         self._frame_positions = np.array([frame.pose.position for frame in scene.frames], dtype=float).reshape(-1, 3)
@@ -239,9 +240,7 @@ class PandaWorld:
     def _distance_to(self, body: int, point: np.ndarray) -> float:
         """Distance (m) from `point` to the surface of `body` (0 when inside)."""
         position, orientation = self.client.getBasePositionAndOrientation(body)
-        inverse = self.client.invertTransform(position, orientation)
-        local = np.array(self.client.multiplyTransforms(inverse[0], inverse[1], list(point), [0, 0, 0, 1])[0])
-        return _distance_to_shape(self.client.getCollisionShapeData(body, -1)[0], local)
+        return self._items[body].distance(point, position, orientation)
 
     def release(self) -> None:
         """Let go of the held object, if any."""
@@ -375,21 +374,6 @@ def _positions_and_tilts(world: PandaWorld) -> tuple[np.ndarray, np.ndarray]:
     object's own z axis, a cylinder's axis, and straight up: 0 for an upright shaft)."""
     positions, orientations = world.frame_poses()
     return positions, rotations.uprightness(orientations)
-
-
-def _distance_to_shape(shape: tuple, point: np.ndarray) -> float:
-    """Distance from `point` (in the body frame) to a box, cylinder (z axis) or sphere."""
-    geometry, dimensions = shape[2], shape[3]
-    if geometry == 3:  # GEOM_BOX: dimensions are full extents
-        outside = np.maximum(np.abs(point) - np.asarray(dimensions) / 2, 0.0)
-        return float(np.linalg.norm(outside))
-    if geometry == 4:  # GEOM_CYLINDER: (height, radius, ...)
-        height, radius = dimensions[0], dimensions[1]
-        radial = max(np.hypot(point[0], point[1]) - radius, 0.0)
-        axial = max(abs(point[2]) - height / 2, 0.0)
-        return float(np.hypot(radial, axial))
-    radius = dimensions[0]  # GEOM_SPHERE
-    return float(max(np.linalg.norm(point) - radius, 0.0))
 
 
 def low_pass(values: np.ndarray, cutoff_hz: float, period: float) -> np.ndarray:

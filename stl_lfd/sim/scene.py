@@ -65,6 +65,25 @@ class SceneObject:
     color: tuple[float, float, float, float] = (0.6, 0.6, 0.6, 1.0)
     friction: float = 1.0
 
+    def distance(self, point: np.ndarray, position=None, orientation=None) -> float:
+        """Distance (m) from a base-frame `point` to the object's surface (0 inside), the object
+        at its own pose or at `position` and `orientation` (a quaternion)."""
+        position = np.asarray(self.position if position is None else position, dtype=float)
+        orientation = rotations.from_euler(*self.orientation) if orientation is None else np.asarray(orientation, dtype=float)
+        local = rotations.rotate(rotations.conjugate(orientation), np.asarray(point, dtype=float) - position)
+        return distance_to_shape(self.shape, self.size, local)
+
+
+def distance_to_shape(shape: str, size: tuple[float, ...], point: np.ndarray) -> float:
+    """Distance from `point` (in the object's frame) to a box (half extents), a cylinder
+    (radius, height; along z) or a sphere (radius); 0 inside."""
+    if shape == "box":
+        return float(np.linalg.norm(np.maximum(np.abs(point) - np.asarray(size), 0.0)))
+    if shape == "cylinder":
+        radius, height = size[0], size[1]
+        return float(np.hypot(max(np.hypot(point[0], point[1]) - radius, 0.0), max(abs(point[2]) - height / 2, 0.0)))
+    return float(max(np.linalg.norm(point) - size[0], 0.0))
+
 
 @dataclass(frozen=True)
 class SceneFrame:

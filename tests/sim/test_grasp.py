@@ -109,16 +109,26 @@ def test_a_grasp_with_nothing_in_reach_fails_the_rollout():
 
 
 @pytest.mark.parametrize(
-    "shape, point, distance",
+    "shape, size, point, distance",
     [
-        ((0, -1, 3, (0.2, 0.1, 0.1)), (0.0, 0.0, 0.0), 0.0),  # box, full extents: inside
-        ((0, -1, 3, (0.2, 0.1, 0.1)), (0.13, 0.0, 0.0), 0.03),
-        ((0, -1, 4, (0.12, 0.01)), (0.0, 0.04, 0.0), 0.03),  # cylinder (height, radius), beside
-        ((0, -1, 4, (0.12, 0.01)), (0.0, 0.0, 0.1), 0.04),  # above its top
-        ((0, -1, 2, (0.05,)), (0.0, 0.0, 0.08), 0.03),  # sphere
+        ("box", (0.1, 0.05, 0.05), (0.0, 0.0, 0.0), 0.0),  # half extents: inside
+        ("box", (0.1, 0.05, 0.05), (0.13, 0.0, 0.0), 0.03),
+        ("cylinder", (0.01, 0.12), (0.0, 0.04, 0.0), 0.03),  # (radius, height), beside
+        ("cylinder", (0.01, 0.12), (0.0, 0.0, 0.1), 0.04),  # above its top
+        ("sphere", (0.05,), (0.0, 0.0, 0.08), 0.03),
     ],
 )
-def test_distance_to_collision_shapes(shape, point, distance):
-    from stl_lfd.sim.panda import _distance_to_shape
+def test_distance_to_shapes(shape, size, point, distance):
+    from stl_lfd.sim.scene import distance_to_shape
 
-    assert _distance_to_shape(shape, np.array(point)) == pytest.approx(distance)
+    assert distance_to_shape(shape, size, np.array(point)) == pytest.approx(distance)
+
+
+def test_the_distance_to_an_object_follows_its_pose():
+    from stl_lfd.rotations import from_euler
+    from stl_lfd.sim.scene import SceneObject
+
+    lying = SceneObject("shaft", "cylinder", (0.01, 0.12), (0.5, 0.0, 0.05), orientation=(np.pi / 2, 0.0, 0.0), mass=0.05)
+    assert lying.distance((0.5, 0.05, 0.05)) == pytest.approx(0.0)  # inside, along its axis (y)
+    assert lying.distance((0.5, 0.0, 0.09)) == pytest.approx(0.03)  # above its side
+    assert lying.distance((0.5, 0.0, 0.09), (0.5, 0.0, 0.05), from_euler(0.0, 0.0, 0.0)) == pytest.approx(0.0)  # stood upright
