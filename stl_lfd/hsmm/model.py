@@ -98,7 +98,7 @@ class HSMM:
         self._check_data(X, lengths)
         names = list(signal_names) if signal_names is not None else [f"s{i}" for i in range(X.shape[1])]
         X, self.signal_names_, reference = to_model_columns(X, names)
-        if reference is not None or not self._coordinates().rotations:  # a TP-HSMM sets its frames' references itself
+        if reference is not None or not self.coordinates().rotations:  # a TP-HSMM sets its frames' references itself
             self.orientation_reference_ = reference
         self.sample_period_ = float(sample_period)
         sequences = np.split(X, np.cumsum(lengths)[:-1])
@@ -221,7 +221,7 @@ class HSMM:
             t += length
             if transmat[state].sum() > 0:
                 state = rng.choice(self.n_states, p=transmat[state])
-        coordinates = self._coordinates()
+        coordinates = self.coordinates()
         if not coordinates.rotations:
             X = np.array([rng.multivariate_normal(self.means_[k], self.covars_[k]) for k in states])
         else:
@@ -263,7 +263,7 @@ class HSMM:
             raise ModelError(f"end_state_, end_offsets_ and end_covars_ must be a state, ({D},) and ({D}, {D})")
         if end is not None and not (np.all(np.isfinite(end[1])) and np.all(np.isfinite(end[2]))):
             raise ModelError("the end point contains NaN or infinity")
-        blocks = len(self._coordinates().rotations)
+        blocks = len(self.coordinates().rotations)
         references = np.atleast_2d(self.orientation) if self.orientation is not None else np.empty((0, 4))
         if blocks and not (references.shape == (blocks, 4) and np.allclose(np.linalg.norm(references, axis=-1), 1.0)):
             raise ModelError(f"a model with orientation (rx, ry, rz) needs orientation_reference_: {blocks} unit quaternion(s), one per frame")
@@ -279,7 +279,7 @@ class HSMM:
 
     def orientations(self, points: np.ndarray) -> np.ndarray | None:
         """`... x 4` quaternions of `... x D` points in the model's columns (None without orientation)."""
-        rotation = self._coordinates().rotation
+        rotation = self.coordinates().rotation
         if rotation is None:
             return None
         return rotations.exp_map(self.orientation, np.asarray(points)[..., rotation])
@@ -327,7 +327,7 @@ class HSMM:
         else:
             bins = [np.split(sequence, np.sort(rng.choice(np.arange(1, len(sequence)), K - 1, replace=False))) for sequence in sequences]
         pooled = [np.concatenate([b[k] for b in bins]) for k in range(K)]
-        coordinates = self._coordinates()
+        coordinates = self.coordinates()
         if not coordinates.rotations:
             self.means_ = np.array([samples.mean(axis=0) for samples in pooled])
             covars = [np.atleast_2d(np.cov(samples.T, bias=True)) if len(samples) > 1 else np.zeros((D, D)) for samples in pooled]
@@ -338,7 +338,7 @@ class HSMM:
         self.covars_ = self._constrained(np.array(covars)) + self.reg_covar * np.eye(D)
         self.startprob_ = np.eye(K)[0]
 
-    def _coordinates(self) -> Coordinates:
+    def coordinates(self) -> Coordinates:
         """Where the model's columns hold an orientation (see `stl_lfd.hsmm.orientation`)."""
         return Coordinates.of(self.feature_names)
 
@@ -356,7 +356,7 @@ class HSMM:
     def _frame_likelihood(self, padded: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """`B x T x K` Gaussian likelihoods divided by their largest value per frame, and the
         `B x T` logs of those divisors (which the log-likelihood adds back)."""
-        coordinates = self._coordinates()
+        coordinates = self.coordinates()
         if not coordinates.rotations:
             log_likelihood = np.stack([gaussian_log_density(padded, self.means_[k], self.covars_[k]) for k in range(self.n_states)], axis=-1)
         else:
@@ -370,7 +370,7 @@ class HSMM:
         D = padded.shape[-1]
         weights = gamma.sum(axis=(0, 1))  # K
         safe = np.maximum(weights, 1e-12)
-        coordinates = self._coordinates()
+        coordinates = self.coordinates()
         if not coordinates.rotations:
             self.means_ = np.einsum("btk,btd->kd", gamma, padded) / safe[:, None]
             centred = padded[:, :, None, :] - self.means_[None, None]  # B x T x K x D
@@ -414,7 +414,7 @@ class HSMM:
         state of the nominal path as an offset from its mean, so that moving that state's
         mean moves the end with it."""
         self.end_state_ = self.nominal_path()[-1]
-        coordinates = self._coordinates()
+        coordinates = self.coordinates()
         if not coordinates.rotations:
             self.end_offsets_ = ends.mean(axis=0) - self.means_[self.end_state_]
             spread = np.atleast_2d(np.cov(ends.T, bias=True)) if len(ends) > 1 else np.zeros((ends.shape[1],) * 2)
@@ -431,7 +431,7 @@ class HSMM:
         if getattr(self, "end_offsets_", None) is None:
             return None
         state = int(self.end_state_)
-        return state, self._coordinates().shifted(np.asarray(self.means_)[state], np.asarray(self.end_offsets_)), np.asarray(self.end_covars_)
+        return state, self.coordinates().shifted(np.asarray(self.means_)[state], np.asarray(self.end_offsets_)), np.asarray(self.end_covars_)
 
     def _hmm_transmat(self) -> np.ndarray:
         """Equivalent HMM transition matrix: self-transition 1 - 1/duration mean (steps)."""

@@ -84,7 +84,11 @@ class Coordinates:
         if not self.rotations:
             return covariances
         identities = np.tile(rotations.IDENTITY, (len(self.rotations), 1))
-        return np.array([self.transport(mean, identities) @ covariance @ self.transport(mean, identities).T for mean, covariance in zip(means, covariances)])
+        moved = []
+        for mean, covariance in zip(means, covariances):
+            transport = self.transport(mean, identities)
+            moved.append(transport @ covariance @ transport.T)
+        return np.array(moved)
 
 
 def to_model_columns(X: np.ndarray, names: list[str]) -> tuple[np.ndarray, list[str], np.ndarray | None]:

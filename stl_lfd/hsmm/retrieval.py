@@ -105,7 +105,7 @@ def _tracked(model: HSMM, states: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
     followed at each step: the states' own, and in the second half of the final state (from
     half its duration mean on), the demonstrations' end point when the model knows it."""
     end = model.end_target()
-    at_reference = model._coordinates().at_reference
+    at_reference = model.coordinates().at_reference
     if end is None or states[-1] != end[0]:
         return np.asarray(model.means_), at_reference(model.means_, model.covars_), states
     before = np.flatnonzero(states != end[0])

@@ -72,23 +72,22 @@ def check_reference(reference: Reference, safety: Safety) -> None:
             f"unsafe reference, not executed: at t = {times[index]:.3f} s it reaches {_point(point)}, outside the workspace ({AXES[axis]} {bound})"
         )
     speeds = np.linalg.norm(np.diff(positions, axis=0), axis=1) / np.diff(times)
-    too_fast = speeds > safety.max_speed
-    if too_fast.any():
-        index = int(np.argmax(too_fast))
-        raise UnsafeReference(
-            f"unsafe reference, not executed: at t = {times[index]:.3f} s it moves at {speeds[index]:.3f} m/s near {_point(positions[index])}, "
-            f"faster than the scene's max_speed of {safety.max_speed:g} m/s"
-        )
+    _check_rate(speeds, safety.max_speed, "it moves at {rate:.3f} m/s", "max_speed of {limit:g} m/s", times, positions)
     if safety.max_angular_speed is not None and reference.orientations is not None:
         turns = reference.orientations
         angular = np.linalg.norm(rotations.log_map(turns[:-1], turns[1:]), axis=1) / np.diff(times)
-        too_fast = angular > safety.max_angular_speed
-        if too_fast.any():
-            index = int(np.argmax(too_fast))
-            raise UnsafeReference(
-                f"unsafe reference, not executed: at t = {times[index]:.3f} s the hand turns at {angular[index]:.3f} rad/s near {_point(positions[index])}, "
-                f"faster than the scene's max_angular_speed of {safety.max_angular_speed:g} rad/s"
-            )
+        _check_rate(angular, safety.max_angular_speed, "the hand turns at {rate:.3f} rad/s", "max_angular_speed of {limit:g} rad/s", times, positions)
+
+
+def _check_rate(rates: np.ndarray, limit: float, doing: str, allowed: str, times: np.ndarray, positions: np.ndarray) -> None:
+    """UnsafeReference at the first of the `T - 1` `rates` between samples above `limit`."""
+    too_fast = rates > limit
+    if too_fast.any():
+        index = int(np.argmax(too_fast))
+        raise UnsafeReference(
+            f"unsafe reference, not executed: at t = {times[index]:.3f} s {doing.format(rate=rates[index])} near {_point(positions[index])}, "
+            f"faster than the scene's {allowed.format(limit=limit)}"
+        )
 
 
 def _point(point: np.ndarray) -> str:
