@@ -1,0 +1,81 @@
+"""Recording a run's trials as they finish (`Recorder`, shared by the trial loop and `tell`),
+and `finish_run`: the remaining trials of a prepared run, on one or several workers."""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Callable
+
+import numpy as np
+
+from stl_lfd.optim.loop import run_remaining_trials
+from stl_lfd.optim.objective import ObjectiveFactory
+from stl_lfd.optim.runs.prepare import PreparedRun
+from stl_lfd.optim.summary import Summary
+from stl_lfd.optim.trials import Outcome, Trial, best_trial
+
+
+class Recorder:
+    """Records each finished trial of a run: its line and signals, the best models when it
+    improves on the best so far, and the summary."""
+
+    def __init__(self, prepared: PreparedRun) -> None:
+        self.prepared = prepared
+        self.history = list(prepared.history)
+        self.best = best_trial(self.history)
+        self.wall_seconds = prepared.summary.wall_seconds
+        if self.best is not None and not prepared.run.has_best_models():
+            prepared.run.write_best_models(prepared.space.apply(prepared.models, self.best.x))
+
+    def record(self, trial: Trial, signals: Any, seconds: float) -> None:
+        """Record `trial` (its `signals` may be None), which took `seconds` of wall time."""
+        run, space = self.prepared.run, self.prepared.space
+        trial.parameters = space.as_dict(trial.x)
+        run.append_trial(trial, signals)
+        if trial.robustness is not None and (self.best is None or trial.robustness > self.best.robustness):
+            self.best = trial
+            run.write_best_models(space.apply(self.prepared.models, trial.x))
+        self.history.append(trial)
+        self.wall_seconds += seconds
+        run.write_summary(self.summary())
+
+    def summary(self) -> Summary:
+        prepared = self.prepared
+        initial = prepared.summary
+        return Summary.of(prepared.task, prepared.space, initial.initial_robustness, self.history, self.wall_seconds, initial.initial_components)
+
+
+def finish_run(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None) -> Summary:
+    """Run the remaining trials of `prepared`, recording each (then `on_trial(trial, best)`);
+    returns the final summary."""
+    recorder = Recorder(prepared)
+    mark = time.perf_counter()
+
+    def record(trial: Trial, signals: Any) -> None:
+        nonlocal mark
+        now = time.perf_counter()
+        recorder.record(trial, signals, now - mark)
+        mark = now
+        on_trial(trial, recorder.best)
+
+    def objective(x: np.ndarray) -> Outcome:
+        return prepared.objective(x, trial=len(recorder.history) + 1)
+
+    workers = prepared.task.optimizer.workers
+    pool = None
+    if workers > 1:
+        from stl_lfd.optim.runs.workers import WorkerPool
+
+        pool = WorkerPool(ObjectiveFactory(prepared.task, prepared.models, prepared.run.path), workers)
+    try:
+        run_remaining_trials(objective, prepared.search_method(), prepared.history, record, pool)
+    except BaseException:
+        if pool is not None:
+            pool.stop()  # now: the trials in flight are lost, as with one worker
+        raise
+    if pool is not None:
+        pool.close()
+    recorder.wall_seconds += time.perf_counter() - mark
+    summary = recorder.summary()
+    prepared.run.write_summary(summary)
+    return summary

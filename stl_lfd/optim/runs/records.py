@@ -1,0 +1,84 @@
+"""The records of a run directory's files: trials as JSON lines (`trials.jsonl`) and the
+pending trial of `stlopt ask` (`pending.json`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from stl_lfd.optim.trials import Trial
+
+
+@dataclass(frozen=True)
+class Pending:
+    """A trial handed out by `stlopt ask`, waiting for its signals (`pending.json`).
+
+    Attributes:
+        trial: its number (0: the unoptimised skill).
+        phase: what chose it (`sobol`, `stl`, ...; `initial` for trial 0).
+        x: its point (None for trial 0).
+        optimizer_seconds: time spent choosing it.
+        asked: when it was handed out (seconds since the epoch).
+    """
+
+    trial: int
+    phase: str
+    x: np.ndarray | None
+    optimizer_seconds: float
+    asked: float
+
+
+def finite(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def trial_problem(trial: Trial, expected_number: int) -> str:
+    """What is wrong with a parsed trial record, or ''."""
+    if trial.trial != expected_number:
+        return f"trial {trial.trial} where trial {expected_number} was expected"
+    if trial.status not in ("ok", "failed"):
+        return f"status {trial.status!r}"
+    if trial.robustness is not None and not math.isfinite(trial.robustness):
+        return f"robustness {trial.robustness}"
+    if (trial.robustness is None) != (trial.status == "failed"):
+        return "a failed trial has a robustness, or a finished one has none"
+    if trial.x.ndim != 1 or not np.all(np.isfinite(trial.x)):
+        return "its point x is not a list of finite numbers"
+    return ""
+
+
+def trial_to_json(trial: Trial) -> dict[str, Any]:
+    return {
+        "trial": trial.trial,
+        "phase": trial.phase,
+        "robustness": trial.robustness,
+        "satisfied": trial.satisfied,
+        "status": trial.status,
+        "error": trial.error,
+        "wall_seconds": round(trial.wall_seconds, 4),
+        "optimizer_seconds": round(trial.optimizer_seconds, 4),
+        "rollout_seconds": round(trial.rollout_seconds, 4),
+        "parameters": trial.parameters,
+        "components": trial.components,
+        **({"routes": trial.routes} if trial.routes else {}),
+        "x": [float(value) for value in trial.x],
+    }
+
+
+def trial_from_json(data: dict[str, Any]) -> Trial:
+    return Trial(
+        trial=int(data["trial"]),
+        phase=str(data["phase"]),
+        x=np.array(data["x"], dtype=float),
+        robustness=None if data["robustness"] is None else float(data["robustness"]),
+        status=str(data["status"]),
+        error=data.get("error"),
+        optimizer_seconds=float(data.get("optimizer_seconds", 0.0)),
+        rollout_seconds=float(data.get("rollout_seconds", 0.0)),
+        parameters=dict(data.get("parameters", {})),
+        components=None if data.get("components") is None else {str(k): float(v) for k, v in data["components"].items()},
+        routes=None if data.get("routes") is None else {str(k): float(v) for k, v in data["routes"].items()},
+    )
