@@ -44,7 +44,6 @@ from stl_lfd.optim.space import build_search_space
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Task, load_task
 from stl_lfd.optim.trials import Trial, best_trial
-from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable, write_signal_csv
 
 TASK_FILE = "task.yaml"

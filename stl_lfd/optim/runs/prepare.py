@@ -18,8 +18,8 @@ from stl_lfd.optim.loop import search_method
 from stl_lfd.optim.methods.base import Problem, SearchMethod
 from stl_lfd.optim.objective import SkillObjective, objective_for, task_models
 from stl_lfd.optim.runs.directory import RunDirectory, check_new_run_path
-from stl_lfd.optim.runs.staging import StagedRun
 from stl_lfd.optim.runs.resume import check_resume, inputs_record
+from stl_lfd.optim.runs.staging import StagedRun
 from stl_lfd.optim.runs.store import RunStore
 from stl_lfd.optim.space import SearchSpace
 from stl_lfd.optim.summary import Summary
