@@ -4,7 +4,7 @@ pick_reorient_insert.yaml), executed on the simulated Panda at 20 object placeme
 saw, drawn by a seeded generator: the shaft and the holder inside the demonstrations' x-y range
 or up to 3 cm beyond it, each turned by any yaw.
 
-    python -m benchmarks.bench_reorient [--placements 20]
+    python -m benchmarks.bench_reorient [--placements 20] [--seed 20261204]
 
 A placement succeeds when the shaft ends in the hole: its bottom below the holder's top, its
 centre within the hole's clearance (6 mm) of the hole's axis in x and y, and upright within 3
@@ -62,12 +62,13 @@ def inserted(signals, holder: Pose) -> tuple[bool, str]:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--placements", type=int, default=20)
+    parser.add_argument("--seed", type=int, default=20261204, help="the placements' generator seed")
     parser.add_argument("--demonstrated-yaws", action="store_true", help="turn the objects only within the demonstrations' yaws")
     arguments = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     skill = PlacedSkill.load(BEHAVIOUR, duration=36.0)
     successes, start, notes = 0, time.perf_counter(), []
-    for index, placement in enumerate(placements(arguments.placements, any_yaw=not arguments.demonstrated_yaws), start=1):
+    for index, placement in enumerate(placements(arguments.placements, arguments.seed, any_yaw=not arguments.demonstrated_yaws), start=1):
         try:
             placed = PlacedSkill(skill.models, skill.behaviour, placed_scene(skill.scene, placement), 36.0)
             ok, how = inserted(placed.execute("pybullet", 100).signals, placement["holder"])

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import os
 import signal
 import sys
@@ -160,7 +161,7 @@ def robustness(
 
 @app.command(cls=_PlainUsage)
 def learn(
-    demos_dir: Path = typer.Argument(..., metavar="DEMOS_DIR", help="Folder of demonstration CSVs (t,x,y,z[,...])."),
+    demos_dir: Path = typer.Argument(..., metavar="DEMOS_DIR", help="Folder of demonstration CSVs (t,x,y,z[,...]), or one CSV."),
     states: int = typer.Option(6, "-K", "--states", help="Number of HSMM states K."),
     restarts: int = typer.Option(1, "--restarts", min=1, help="EM starts: k-bins, then random segmentations; the most likely model is kept."),
     output: Path = typer.Option(Path("model.npz"), "-o", "--output", help="Model file to write (.npz)."),
@@ -170,6 +171,11 @@ def learn(
     plot: Optional[Path] = typer.Option(None, "--plot", help="Also draw demos, states and retrieval into this PNG."),
     frames: Optional[str] = typer.Option(
         None, "--frames", help="Frames to learn in, comma-separated (default with frame sidecars: base and every frame they give)."
+    ),
+    min_spread: str = typer.Option(
+        "auto",
+        "--min-spread",
+        help="Least spread of a state: POSITION,ANGLE,DURATION with units (5mm,3deg,10%); auto: that for a single demonstration, none otherwise; none.",
     ),
 ) -> None:
     """Learn a skill model (HSMM) from demonstrations and write the model file.
@@ -187,16 +193,22 @@ def learn(
     \b
         stlopt learn demos/three_regions -o three_regions.npz --plot skill.png
         stlopt learn demos/insert -o insert.npz --frames shaft,holder
+
+    One demonstration does not vary, so by itself it would give states the optimiser cannot
+    move; --min-spread (auto) then widens every state to at least 5 mm and 3 degrees, and
+    every duration to at least 10 % of its mean.
     """
     from stl_lfd.files import atomic_output, check_output_file
     from stl_lfd.hsmm import TPHSMM, demonstrated_skill, learn_from_folder, retrieve, save_model, summary_rows
+    from stl_lfd.hsmm.spread import parse_min_spread
 
     with user_errors():
         check_output_file(output, (".npz",), "model file")
         if plot is not None:
             check_output_file(plot, FIGURE_SUFFIXES, "figure")
         chosen = [name.strip() for name in frames.split(",")] if frames is not None else None
-        model, sequences = learn_from_folder(demos_dir, states, sample_period, chosen, restarts)
+        floor = parse_min_spread(min_spread)
+        model, sequences = learn_from_folder(demos_dir, states, sample_period, chosen, restarts, floor)
         save_model(model, output)
         shown_model = demonstrated_skill(model, demos_dir)
         if plot is not None:
@@ -208,7 +220,14 @@ def learn(
                 figure.savefig(temporary, dpi=110)
     _print_summary(summary_rows(shown_model), model.signal_names_)
     learned_in = f", frames {', '.join(model.frame_names_)}" if isinstance(model, TPHSMM) else ""
-    print(f"wrote {output} ({len(sequences)} demonstrations, K = {states}{learned_in}, {len(model.monitor_.history)} EM iterations)", file=sys.stderr)
+    if model.min_spread is not None:
+        spread = model.min_spread
+        print(
+            f"states widened to at least {1000 * spread.position:g} mm and {math.degrees(spread.angle):g} degrees, durations to {100 * spread.duration:g} % of their means (--min-spread)",
+            file=sys.stderr,
+        )
+    count = f"{len(sequences)} demonstration{'s' if len(sequences) != 1 else ''}"
+    print(f"wrote {output} ({count}, K = {states}{learned_in}, {len(model.monitor_.history)} EM iterations)", file=sys.stderr)
 
 
 def _print_summary(rows: list[dict], names: list[str]) -> None:

@@ -56,6 +56,7 @@ def write(tmp_path: Path, text: str) -> Path:
         ("scene: s\nsteps:\n  - {action: grasp}\n", "'steps' has no skill"),
         ("scene: s\nsteps: []\n", "'steps' must be a non-empty list"),
         ("steps:\n  - {skill: a, demos: demos}\n", "missing key 'scene'"),
+        ("scene: s\nsteps:\n  - {skill: a, demos: demos, learn_in: holder}\n", r"'steps\[0\].learn_in' must list the frames"),
     ],
 )
 def test_bad_behaviour_files_name_the_file_and_the_step(tmp_path, text, message):
@@ -98,3 +99,14 @@ def test_the_unoptimised_behaviour_picks_then_pushes_the_shaft_onto_the_holder(p
     for other in runs[1:]:
         for name in runs[0].columns:
             assert np.array_equal(runs[0].columns[name], other.columns[name]), name
+
+
+def test_a_skill_from_one_demonstration_learned_in_its_object_frame():
+    from stl_lfd.hsmm import TPHSMM
+    from stl_lfd.skill.behaviour import behaviour_models
+
+    behaviour = load_behaviour(ROOT / "configs" / "behaviours" / "pick_reorient_insert_one.yaml")
+    assert [step.learn_in for step in behaviour.skills] == [("shaft",), ("holder",)]
+    models = behaviour_models(behaviour)
+    assert isinstance(models["insert"], TPHSMM) and models["insert"].frame_names_ == ["holder"]
+    assert models["insert"].min_spread is not None  # one demonstration: widened

@@ -42,3 +42,18 @@ def test_the_kinematic_backend_carries_the_grasped_shaft_so_plans_see_it_turn():
     assert np.degrees(tilt[0]) == pytest.approx(90.0) and np.degrees(tilt[-1]) < 3.0  # lying, then upright
     assert x[0] == pytest.approx(0.45) and abs(x[-1] - signals.columns["holder_x"][-1]) < 0.003 and z[-1] < 0.1
     assert SPEC.robustness(signals.columns, signals.times, semantics="classic") > 0
+
+
+@pytest.mark.slow
+def test_the_symmetric_shaft_and_hole_are_inserted_at_yaws_never_demonstrated():
+    import math
+
+    from stl_lfd.poses import Pose
+    from stl_lfd.skill import placed_scene
+
+    skill = PlacedSkill.load(ROOT / "configs" / "behaviours" / "pick_reorient_insert.yaml", duration=36.0)
+    placement = {"shaft": Pose((0.42, -0.22, 0.056), math.radians(150)), "holder": Pose((0.58, 0.22, 0.04), math.radians(-100))}
+    placed = PlacedSkill(skill.models, skill.behaviour, placed_scene(skill.scene, placement), 36.0)
+    end = {name: values[-1] for name, values in placed.execute("pybullet", 100).signals.columns.items()}
+    assert abs(end["shaft_x"] - 0.58) < 0.006 and abs(end["shaft_y"] - 0.22) < 0.006  # within the hole's clearance
+    assert end["shaft_z"] - 0.06 < 0.06 and np.degrees(end["shaft_tilt"]) < 3.0  # its bottom below the holder's top, upright

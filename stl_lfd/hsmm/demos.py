@@ -19,11 +19,15 @@ SIDECAR_SUFFIX = ".frames.yaml"
 
 
 def load_demos(folder: str | Path) -> list[SignalTable]:
-    """Every `*.csv` of `folder`, sorted by name; each must have `t,x,y,z` and the same columns."""
+    """Every `*.csv` of `folder`, sorted by name (or `folder` itself, a single demonstration's
+    CSV file); each must have `t,x,y,z` and the same columns."""
     folder = Path(folder)
-    if not folder.is_dir():
-        raise SignalError(f"{folder}: no such folder of demonstrations")
-    paths = sorted(folder.glob("*.csv"))
+    if folder.is_file() and folder.suffix == ".csv":
+        paths = [folder]
+    elif not folder.is_dir():
+        raise SignalError(f"{folder}: no such folder of demonstrations (or demonstration CSV file)")
+    else:
+        paths = sorted(folder.glob("*.csv"))
     if not paths:
         raise SignalError(f"{folder}: no demonstration CSV files in this folder")
     demos = [with_checked_orientation(read_signal_csv(path, required=POSITION_COLUMNS)) for path in paths]

@@ -10,6 +10,7 @@ import numpy as np
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm.demos import SIDECAR_SUFFIX, load_demo_frames, load_demos, median_period, resample
 from stl_lfd.hsmm.model import HSMM
+from stl_lfd.hsmm.spread import ONE_DEMONSTRATION, MinimumSpread
 from stl_lfd.hsmm.tp import TPHSMM
 from stl_lfd.limits import MAX_STATES, samples_problem
 from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment
@@ -21,7 +22,12 @@ COARSEST_DEFAULT_PERIOD = 0.02
 
 
 def learn_from_folder(
-    folder: str | Path, n_states: int = 6, sample_period: float | None = None, frames: list[str] | None = None, restarts: int = 1
+    folder: str | Path,
+    n_states: int = 6,
+    sample_period: float | None = None,
+    frames: list[str] | None = None,
+    restarts: int = 1,
+    min_spread: MinimumSpread | None | str = "auto",
 ) -> tuple[HSMM, list[np.ndarray]]:
     """Load every demonstration CSV of `folder` and its frame sidecar if any, then `learn`.
 
@@ -31,7 +37,8 @@ def learn_from_folder(
     _check_settings(n_states, sample_period)
     demos = load_demos(folder)
     poses = load_demo_frames(demos)
-    return learn(demos, n_states, sample_period, source=str(folder), poses=poses, frames=model_frames(poses, frames, str(folder)), restarts=restarts)
+    frames = model_frames(poses, frames, str(folder))
+    return learn(demos, n_states, sample_period, source=str(folder), poses=poses, frames=frames, restarts=restarts, min_spread=min_spread)
 
 
 def model_frames(poses: list[dict[str, Pose]] | None, chosen: list[str] | None, source: str) -> list[str] | None:
@@ -55,9 +62,13 @@ def learn(
     poses: list[dict[str, Pose]] | None = None,
     frames: list[str] | None = None,
     restarts: int = 1,
+    min_spread: MinimumSpread | None | str = "auto",
 ) -> tuple[HSMM, list[np.ndarray]]:
     """Resample the demonstrations (signal tables with the same columns) to one period and fit
     (`restarts` EM starts, the most likely kept: `HSMM.n_init`).
+
+    `min_spread` floors the learned spread (`HSMM.min_spread`); "auto" floors it at
+    `ONE_DEMONSTRATION` when there is a single demonstration, and not at all otherwise.
 
     The default period is the demonstrations' median period, but not finer than
     `COARSEST_DEFAULT_PERIOD` (50 Hz). With `frames`, the model is a `TPHSMM` learned in those
@@ -81,10 +92,15 @@ def learn(
             f"{source}: K = {n_states} needs at least {2 * n_states} samples per demonstration (the shortest has {shortest} after resampling); use a smaller K"
         )
     lengths = np.array([len(s) for s in sequences])
+    if min_spread == "auto":
+        min_spread = ONE_DEMONSTRATION if len(demos) == 1 else None
+    assert not isinstance(min_spread, str)
     if frames is None:
-        return HSMM(n_states=n_states, n_init=restarts).fit(np.concatenate(sequences), lengths, period, list(demos[0].columns)), sequences
+        return HSMM(n_states=n_states, n_init=restarts, min_spread=min_spread).fit(
+            np.concatenate(sequences), lengths, period, list(demos[0].columns)
+        ), sequences
     poses = poses if poses is not None else [{} for _ in demos]
-    model = TPHSMM(n_states=n_states, n_init=restarts)
+    model = TPHSMM(n_states=n_states, n_init=restarts, min_spread=min_spread)
     try:
         model.fit(np.concatenate(sequences), lengths, period, list(demos[0].columns), poses, frames)
     except ModelError as error:

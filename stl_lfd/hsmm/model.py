@@ -16,6 +16,7 @@ import stl_lfd.rotations as rotations
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm._forward import duration_pmf, hmm_posteriors, state_occupancy
 from stl_lfd.hsmm.orientation import Coordinates, to_model_columns
+from stl_lfd.hsmm.spread import MinimumSpread, widened
 
 logger = logging.getLogger(__name__)
 
@@ -47,6 +48,9 @@ class HSMM:
         n_states: K.
         n_iter, tol: EM iteration limit and log-likelihood gain that stops it.
         reg_covar: added to the diagonal of every covariance (units of the signals squared).
+        min_spread: after learning, every state (and the end point) is widened to at least this
+            standard deviation in every direction, and every duration to at least this
+            fraction of its mean (`stl_lfd.hsmm.spread`; for one demonstration); None: no floor.
 
     Learned attributes (plain arrays, free to modify before `state_sequence` or retrieval):
         means_: `K x D` state means.
@@ -68,12 +72,15 @@ class HSMM:
             that may still be moving). None in models from older files.
     """
 
-    def __init__(self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-2, reg_covar: float = 1e-6, n_init: int = 1) -> None:
+    def __init__(
+        self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-2, reg_covar: float = 1e-6, n_init: int = 1, min_spread: MinimumSpread | None = None
+    ) -> None:
         self.n_states = n_states
         self.n_iter = n_iter
         self.tol = tol
         self.reg_covar = reg_covar
         self.n_init = n_init
+        self.min_spread = min_spread
 
     # --- learning -------------------------------------------------------------------------
 
@@ -118,8 +125,16 @@ class HSMM:
             setattr(self, name, value)
         self._fit_durations(gamma, lengths)
         self._fit_end(np.array([sequence[-1] for sequence in sequences]))
+        if self.min_spread is not None:
+            self._widen(self.min_spread)
         self._check()
         return self
+
+    def _widen(self, spread: MinimumSpread) -> None:
+        stds = spread.column_stds(self.coordinates(), self.means_.shape[1])
+        self.covars_ = widened(self.covars_, stds)
+        self.end_covars_ = widened(self.end_covars_, stds)
+        self.duration_stds_ = np.maximum(self.duration_stds_, spread.duration * self.duration_means_)
 
     def _learned(self) -> dict:
         """The EM's results so far (to keep the best of several starts)."""

@@ -24,6 +24,7 @@ import stl_lfd.rotations as rotations
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm.model import HSMM
 from stl_lfd.hsmm.orientation import Coordinates, to_model_columns
+from stl_lfd.hsmm.spread import MinimumSpread
 from stl_lfd.poses import BASE_FRAME, Pose
 from stl_lfd.rotations import QUATERNION_COLUMNS
 
@@ -50,9 +51,16 @@ class TPHSMM(HSMM):
     """
 
     def __init__(
-        self, n_states: int = 6, n_iter: int = 50, tol: float = 1e-2, reg_covar: float = 1e-6, n_init: int = 1, relevance: float | None = RELEVANCE
+        self,
+        n_states: int = 6,
+        n_iter: int = 50,
+        tol: float = 1e-2,
+        reg_covar: float = 1e-6,
+        n_init: int = 1,
+        relevance: float | None = RELEVANCE,
+        min_spread: MinimumSpread | None = None,
     ) -> None:
-        super().__init__(n_states, n_iter, tol, reg_covar, n_init)
+        super().__init__(n_states, n_iter, tol, reg_covar, n_init, min_spread)
         self.relevance = relevance
 
     def fit(  # type: ignore[override]

@@ -8,6 +8,7 @@ path of a user's YAML file. A scene file has the keys of `Scene` below (all opti
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
@@ -96,12 +97,26 @@ class SceneFrame:
         pose: where the frame is (position in metres, yaw in radians about z).
         objects: the scene objects that move with it, rigidly.
         area: `(lower, upper)` x-y corners the frame's position may be placed in, or None.
+        symmetry: how many yaws a full turn about z brings the frame's objects back to
+            themselves (2: a lying cylinder, 4: a square hole; 1: none). A placement's yaw is
+            taken as the equivalent yaw nearest `home_yaw`, so skills see the object as it was
+            demonstrated.
+        home_yaw: the yaw of the frame in the scene file (rad).
     """
 
     name: str
     pose: Pose
     objects: tuple[str, ...]
     area: tuple[tuple[float, float], tuple[float, float]] | None = None
+    symmetry: int = 1
+    home_yaw: float = 0.0
+
+    def equivalent(self, pose: Pose) -> Pose:
+        """`pose` with its yaw turned by a multiple of the symmetry's angle to lie within half of
+        that angle of `home_yaw`: the same physical placement of the frame's objects."""
+        step = 2.0 * math.pi / self.symmetry
+        turns = round((pose.yaw - self.home_yaw) / step)
+        return pose if turns == 0 else Pose(pose.position, pose.yaw - turns * step)
 
     @property
     def signals(self) -> tuple[str, str, str]:
@@ -230,8 +245,9 @@ class Scene:
         self.check_placement(placements, source)
         frames = {frame.name: frame for frame in self.frames}
         objects = {item.name: item for item in self.objects}
-        for name, pose in placements.items():
+        for name, placed in placements.items():
             frame = frames[name]
+            pose = frame.equivalent(placed)
             for object_name in frame.objects:
                 item = objects[object_name]
                 local = frame.pose.from_base(np.array([item.position]))
@@ -318,7 +334,7 @@ def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
     where = f"frames.{name}"
     if not isinstance(name, str) or not name.isidentifier() or name == BASE_FRAME:
         raise ConfigError(f"{path}: frame name {shown(name)} must be a name (letters, digits, _) other than '{BASE_FRAME}'")
-    check_keys(data, ("position", "yaw", "objects", "area"), path, where, required=("position", "objects"))
+    check_keys(data, ("position", "yaw", "objects", "area", "symmetry"), path, where, required=("position", "objects"))
     pose = parse_pose({key: data[key] for key in ("position", "yaw") if key in data}, path, where)
     objects = data["objects"]
     known = [item.name for item in scene.objects]
@@ -331,7 +347,12 @@ def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
         if not all(low < high for low, high in zip(lower, upper)):
             raise ConfigError(f"{path}: '{where}.area' must have lower < upper in x and y")
         area = (lower, upper)
-    frame = SceneFrame(name, pose, tuple(str(item) for item in objects), area)  # type: ignore[arg-type]
+    symmetry = data.get("symmetry", 1)
+    if isinstance(symmetry, bool) or not isinstance(symmetry, int) or symmetry < 1:
+        raise ConfigError(
+            f"{path}: '{where}.symmetry' must be a whole number of yaws that give the same objects (1: none, 2: a half turn, 4: a quarter turn; got {shown(symmetry)})"
+        )
+    frame = SceneFrame(name, pose, tuple(str(item) for item in objects), area, symmetry, pose.yaw)  # type: ignore[arg-type]
     _check_area(frame, pose, str(path))
     return frame
 

@@ -43,6 +43,7 @@ class SkillStep:
     states: int
     settle: float
     frames: tuple[tuple[str, str], ...] = ()  # (model frame, scene frame) bindings
+    learn_in: tuple[str, ...] | None = None  # the frames to learn in (None: base and every sidecar frame)
 
     def poses(self, scene_poses: Mapping[str, Pose]) -> dict[str, Pose]:
         """Model frame -> pose, from the scene's frame poses and this step's bindings."""
@@ -98,7 +99,7 @@ def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:
         if item["action"] not in ACTIONS:
             raise ConfigError(f"{path}: '{where}.action' must be one of {', '.join(ACTIONS)} (got {shown(item['action'])})")
         return ActionStep(item["action"], number(item.get("seconds", 1.0), path, f"{where}.seconds", positive=True))
-    check_keys(item, ("skill", "demos", "model", "states", "settle", "frames"), path, where, required=("skill",))
+    check_keys(item, ("skill", "demos", "model", "states", "settle", "frames", "learn_in"), path, where, required=("skill",))
     if ("demos" in item) == ("model" in item):
         raise ConfigError(f"{path}: '{where}' needs exactly one of 'demos' (a folder to learn from) or 'model' (a model file)")
     source_key = "demos" if "demos" in item else "model"
@@ -112,6 +113,7 @@ def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:
         states=integer(item.get("states", 6), path, f"{where}.states", minimum=1),
         settle=number(item.get("settle", DEFAULT_SETTLE), path, f"{where}.settle", minimum=0.0),
         frames=_bindings(item.get("frames", {}), path, f"{where}.frames"),
+        learn_in=_frame_names(item["learn_in"], path, f"{where}.learn_in") if "learn_in" in item else None,
     )
 
 
@@ -121,9 +123,21 @@ def _bindings(data: Any, path: Path, where: str) -> tuple[tuple[str, str], ...]:
     return tuple(data.items())
 
 
+def _frame_names(data: Any, path: Path, where: str) -> tuple[str, ...]:
+    if not isinstance(data, list) or not data or not all(isinstance(name, str) for name in data):
+        raise ConfigError(f"{path}: '{where}' must list the frames to learn the skill in, such as [base, holder] (got {shown(data)})")
+    return tuple(data)
+
+
 def behaviour_models(behaviour: Behaviour) -> dict[str, HSMM]:
     """The model of every skill, learned from its demonstrations or loaded."""
-    return {step.name: learn_from_folder(step.demos, step.states)[0] if step.demos is not None else load_model(step.model) for step in behaviour.skills}
+    return {step.name: _model(step) for step in behaviour.skills}
+
+
+def _model(step: SkillStep) -> HSMM:
+    if step.demos is None:
+        return load_model(step.model)
+    return learn_from_folder(step.demos, step.states, frames=list(step.learn_in) if step.learn_in is not None else None)[0]
 
 
 def behaviour_reference(

@@ -88,3 +88,44 @@ def test_placements_outside_the_table_or_of_unknown_frames_are_refused():
         scene.placement_from_options(["holder=0.5,0.2", "holder=0.5,0.25"])
     placement = scene.placement_from_options(["shaft=0.4,-0.3"])
     assert placement["shaft"].position == (0.4, -0.3, 0.08) and placement["shaft"].yaw == 0.0
+
+
+def test_a_symmetric_frame_takes_the_equivalent_yaw_nearest_its_scene_yaw():
+    import math
+    from dataclasses import replace
+
+    import numpy as np
+
+    from stl_lfd.poses import Pose
+
+    scene = load_scene("pick_reorient_insert")
+    frames = {frame.name: frame for frame in scene.frames}
+    assert (frames["shaft"].symmetry, frames["holder"].symmetry) == (2, 4)
+    assert frames["shaft"].equivalent(Pose((0.5, -0.2, 0.056), math.radians(170))).yaw == pytest.approx(math.radians(-10))
+    assert frames["holder"].equivalent(Pose((0.5, 0.2, 0.04), math.radians(-100))).yaw == pytest.approx(math.radians(-10))
+    assert frames["holder"].equivalent(Pose((0.5, 0.2, 0.04), math.radians(44))).yaw == pytest.approx(math.radians(44))
+    turned = scene.place({"shaft": Pose((0.5, -0.2, 0.056), math.radians(170)), "holder": Pose((0.5, 0.2, 0.04), math.radians(-100))})
+    assert turned.frame_poses["shaft"].yaw == pytest.approx(math.radians(-10))
+    assert turned.frame_poses["holder"].yaw == pytest.approx(math.radians(-10))
+    # the objects stand where the placement asked, the half-turned rails swapped
+    asymmetric = replace(scene, frames=tuple(replace(frame, symmetry=1) for frame in scene.frames))
+    asked = asymmetric.place({"shaft": Pose((0.5, -0.2, 0.056), math.radians(170))})
+    rails = {item.name: np.array(item.position) for item in turned.objects if item.name.startswith("rest_")}
+    other = {item.name: np.array(item.position) for item in asked.objects if item.name.startswith("rest_")}
+    assert np.allclose(rails["rest_left"], other["rest_right"]) and np.allclose(rails["rest_right"], other["rest_left"])
+    assert not np.allclose(rails["rest_left"], other["rest_left"])
+    # a scene without symmetry keeps every yaw
+    plain = load_scene("pick_insert")
+    assert plain.place({"holder": Pose((0.6, 0.1, 0.04), 3.0)}).frame_poses["holder"].yaw == 3.0
+
+
+@pytest.mark.parametrize("value", ["0", "1.5", "true", "two"])
+def test_a_frame_symmetry_must_be_a_positive_whole_number(tmp_path, value):
+    path = write(
+        tmp_path,
+        "description: d\nobjects:\n  - {name: a, shape: box, size: [0.01, 0.01, 0.01], position: [0.5, 0, 0.02]}\n"
+        f"frames:\n  cup: {{position: [0.5, 0, 0.02], objects: [a], symmetry: {value}}}\n",
+    )
+    with pytest.raises(ConfigError, match=r"'frames.cup.symmetry' must be a whole number") as error:
+        load_scene(path)
+    assert str(path) in str(error.value)
