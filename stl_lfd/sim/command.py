@@ -33,8 +33,9 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from stl_lfd.errors import ConfigError, ExecutionError, SignalError
+from stl_lfd.errors import ConfigError, ExecutionError
 from stl_lfd.signals import SignalTable, read_signal_csv
+from stl_lfd.sim.plausibility import check_recorded
 from stl_lfd.sim.reference import Reference, Rollout, write_reference_csv
 from stl_lfd.sim.safety import check_reference
 from stl_lfd.sim.scene import Scene
@@ -140,7 +141,7 @@ class CommandBackend:
             if not signals_path.is_file():
                 raise ExecutionError(f"the command exited without writing {signals_path}{_last_words(folder)}")
             signals = read_signal_csv(signals_path, required=("x", "y", "z"))
-            check_coverage(signals, reference.duration)
+            check_recorded(signals, reference, scene, rate)
         return Rollout(signals, tracking_error(signals, reference))
 
     @contextmanager
@@ -237,14 +238,6 @@ def tracking_error(signals: SignalTable, reference: Reference) -> np.ndarray:
     """Distance (m) between the recorded positions and the reference at the recorded times."""
     recorded = np.column_stack([signals.columns[axis] for axis in ("x", "y", "z")])
     return np.linalg.norm(recorded - reference.positions_at(signals.times), axis=1)
-
-
-def check_coverage(signals: SignalTable, duration: float) -> None:
-    """Signals from outside must start at 0 and last the whole rollout (to within a sample)."""
-    period = float(np.median(np.diff(signals.times))) if signals.samples > 1 else duration
-    if signals.samples < 2 or abs(signals.times[0]) > period or signals.times[-1] < duration - period - 1e-9:
-        covered = f"{signals.times[0]:g} to {signals.times[-1]:g} s" if signals.samples else "nothing"
-        raise SignalError(f"{signals.source}: the signals cover {covered}, but the rollout lasts 0 to {duration:g} s")
 
 
 def _digest(path: Path) -> str:

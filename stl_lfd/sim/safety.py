@@ -32,12 +32,15 @@ class Safety:
         lower, upper: corners (m, robot base frame) of the box every reference position lies in.
         max_speed: the fastest Cartesian speed (m/s) a reference may ask for.
         max_angular_speed: the fastest turn of the hand (rad/s), or None for no limit.
+        max_force: the largest contact force (N) a recording from outside may show, or None
+            for `stl_lfd.sim.plausibility.DEFAULT_MAX_FORCE`.
     """
 
     lower: tuple[float, float, float]
     upper: tuple[float, float, float]
     max_speed: float
     max_angular_speed: float | None = None
+    max_force: float | None = None
 
     def __post_init__(self) -> None:
         if not all(low < high for low, high in zip(self.lower, self.upper)):
@@ -46,12 +49,15 @@ class Safety:
             raise ValueError(f"max_speed must be positive (got {self.max_speed})")
         if self.max_angular_speed is not None and not self.max_angular_speed > 0:
             raise ValueError(f"max_angular_speed must be positive (got {self.max_angular_speed})")
+        if self.max_force is not None and not self.max_force > 0:
+            raise ValueError(f"max_force must be positive (got {self.max_force})")
 
     def __repr__(self) -> str:
         # Without an angular limit, as before there was one: a scene's repr is the fingerprint
         # that lets runs started with it resume.
         angular = f", max_angular_speed={self.max_angular_speed!r}" if self.max_angular_speed is not None else ""
-        return f"Safety(lower={self.lower!r}, upper={self.upper!r}, max_speed={self.max_speed!r}{angular})"
+        force = f", max_force={self.max_force!r}" if self.max_force is not None else ""
+        return f"Safety(lower={self.lower!r}, upper={self.upper!r}, max_speed={self.max_speed!r}{angular}{force})"
 
 
 def check_reference(reference: Reference, safety: Safety) -> None:

@@ -390,12 +390,13 @@ def _parse_camera(data: Any, path: Path) -> Camera:
 
 
 def _parse_safety(data: Any, path: Path) -> Safety:
-    check_keys(data, ("workspace", "max_speed", "max_angular_speed"), path, "safety", required=("workspace", "max_speed"))
+    check_keys(data, ("workspace", "max_speed", "max_angular_speed", "max_force"), path, "safety", required=("workspace", "max_speed"))
     box = check_keys(data["workspace"], ("lower", "upper"), path, "safety.workspace", required=("lower", "upper"))
     lower, upper = (vector(box[key], 3, path, f"safety.workspace.{key}") for key in ("lower", "upper"))
     try:
         angular = number(data["max_angular_speed"], path, "safety.max_angular_speed", positive=True) if "max_angular_speed" in data else None
-        return Safety(lower, upper, number(data["max_speed"], path, "safety.max_speed", positive=True), angular)
+        force = number(data["max_force"], path, "safety.max_force", positive=True) if "max_force" in data else None
+        return Safety(lower, upper, number(data["max_speed"], path, "safety.max_speed", positive=True), angular, force)
     except ValueError as error:
         raise ConfigError(f"{path}: 'safety': {error}") from None
 

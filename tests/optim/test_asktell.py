@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -220,3 +221,45 @@ def test_a_shell_script_loop_with_the_pybullet_executor_matches_optimize_and_sur
     )  # fmt: skip
     assert optimized.returncode == 0, optimized.stderr
     assert recorded(tmp_path / "asked") == recorded(tmp_path / "optimized")
+
+
+def _rewritten(path, target, change):
+    """A copy of the signal CSV at `path` with `change(column name, values)` applied."""
+    from stl_lfd.signals import read_signal_csv
+
+    signals = read_signal_csv(path)
+    columns = {name: change(name, np.array(values, dtype=float)) for name, values in signals.columns.items()}
+    times = change("t", np.array(signals.times, dtype=float))
+    write_signal_csv(type(signals)(times, columns, str(target)), target, digits=17)
+    return target
+
+
+def test_absurd_signals_are_refused_and_the_next_ask_is_what_it_would_have_been(tmp_path, learned_model_file):
+    from stl_lfd.sim.plausibility import ImplausibleSignals
+
+    proposals = {}
+    for name, absurd in (("plain", False), ("poisoned", True)):
+        folder = tmp_path / name
+        folder.mkdir()
+        _, first = start(folder, learned_model_file)
+        run = folder / "asked"
+        tell(run, execute_kinematically(first.reference))
+        for _ in range(2):  # the initial design, then trial 3 from the GP
+            asked = ask(run)
+            signals = execute_kinematically(asked.reference)
+            if absurd and asked.trial == 2:
+                cases = {
+                    "everywhere 1e300": lambda column, values: np.full_like(values, 1e300) if column in "xyz" else values,
+                    "one sample at 1e308": lambda column, values: np.where(np.arange(values.size) == 9, 1e308, values) if column == "x" else values,
+                    "milliseconds": lambda column, values: values * 1000 if column == "t" else values,
+                    "a metre off": lambda column, values: values + 1.0 if column == "x" else values,
+                    "a crushing force": lambda column, values: values + 1e5 if column == "force" else values,
+                }
+                for label, change in cases.items():
+                    bad = _rewritten(signals, tmp_path / f"{label}.csv", change)
+                    with pytest.raises(ImplausibleSignals, match=r"\.csv"):
+                        tell(run, bad)
+                    assert RunDirectory.open(run).pending().trial == 2, label
+            tell(run, signals)
+        proposals[name] = (ask(run).trial, read_reference_csv(ask(run).reference).positions.tolist(), recorded(run))
+    assert proposals["poisoned"] == proposals["plain"]

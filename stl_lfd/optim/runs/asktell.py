@@ -35,7 +35,9 @@ from stl_lfd.optim.task import Overrides, Task
 from stl_lfd.optim.trials import Outcome, Trial
 from stl_lfd.signals import read_signal_csv, write_signal_csv
 from stl_lfd.sim import Reference, UnsafeReference, exchange_folder, read_reference_csv, write_reference_csv
-from stl_lfd.sim.command import EXECUTIONS_DIR, check_coverage, gate, tracking_error
+from stl_lfd.sim.command import EXECUTIONS_DIR, gate, tracking_error
+from stl_lfd.sim.plausibility import check_recorded
+from stl_lfd.sim.reference import Rollout, warn_if_untracked
 
 REFERENCE_FILE = "reference.csv"
 
@@ -174,11 +176,12 @@ def _scored(objective: SkillObjective, reference: Reference, path: Path, run: Ru
     """The signals at `path`, checked to be trial `trial`'s, scored."""
     _check_not_another_trials(path, run, trial)
     signals = read_signal_csv(path, required=("x", "y", "z"))
-    check_coverage(signals, reference.duration)
+    check_recorded(signals, reference, objective.scene, objective.task.rate)
     errors = tracking_error(signals, reference)
     tolerance = objective.scene.tracking_tolerance
     if errors.max() > tolerance:
         _check_follows(signals, reference, errors, tolerance, run, trial)
+        warn_if_untracked(Rollout(signals, errors), reference, tolerance)
     return objective.score(signals)
 
 

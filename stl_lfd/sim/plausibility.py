@@ -1,0 +1,95 @@
+"""Signals recorded outside stlopt (told with `stlopt tell`, or written by an executor command)
+must look like a recording of this robot executing this reference before they become a trial.
+
+A recording that is not (positions far outside the workspace, an absurd force, times in
+milliseconds, samples at uneven times) is refused with one line naming the file and the row:
+scored, it would become a trial whose robustness is nonsense, and the optimiser's model of the
+objective would be ruined for the rest of the run. A recording that is plausible but strays
+from the reference by more than the scene's tracking tolerance is kept, with a warning.
+
+The limits: positions within `POSITION_MARGIN` of the scene's safety workspace; the `force`
+column (when recorded) at most the scene's `safety.max_force` (default `DEFAULT_MAX_FORCE`);
+times in seconds from 0 to the rollout's duration (to within `END_TOLERANCE` or two samples),
+uniformly sampled, at a rate within a factor `RATE_FACTOR` of the one asked for.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from stl_lfd.errors import SignalError
+from stl_lfd.signals import SignalTable
+from stl_lfd.sim.reference import Reference
+from stl_lfd.sim.scene import Scene
+
+POSITION_MARGIN = 0.25  # m beyond the workspace box: a robot's tracking error, not a typo
+DEFAULT_MAX_FORCE = 1000.0  # N: far above any contact a Panda survives
+END_TOLERANCE = 0.05  # of the duration: a recording may run a little past the reference's end
+RATE_FACTOR = 10.0
+UNIFORM_TOLERANCE = 0.01  # of the step: a recording's clock jitter
+
+
+class ImplausibleSignals(SignalError):
+    """Recorded signals that cannot be a recording of the robot executing the reference."""
+
+
+def check_recorded(signals: SignalTable, reference: Reference, scene: Scene, rate: float) -> None:
+    """Raise `ImplausibleSignals` (one line: the file, the row, what is wrong) unless `signals`
+    could have been recorded executing `reference` in `scene` at `rate` samples/s."""
+    _check_times(signals, reference.duration, rate)
+    _check_positions(signals, scene)
+    _check_force(signals, scene)
+
+
+def _row(signals: SignalTable, index: int) -> str:
+    """`FILE:LINE` of sample `index` (the header is line 1)."""
+    return f"{signals.source}:{index + 2}"
+
+
+def _check_times(signals: SignalTable, duration: float, rate: float) -> None:
+    times = signals.times
+    if times.size < 2:
+        raise ImplausibleSignals(f"{signals.source}: {times.size} sample; a recording needs at least 2")
+    steps = np.diff(times)
+    if not np.all(steps > 0):
+        index = int(np.argmax(steps <= 0)) + 1
+        raise ImplausibleSignals(f"{_row(signals, index)}: t = {times[index]:g} s does not come after the sample before it ({times[index - 1]:g} s)")
+    period = float(np.median(steps))
+    if abs(times[0]) > period or times[-1] < duration - period - 1e-9 or times[-1] > duration * (1 + END_TOLERANCE) + 2 * period:
+        unit = " (times must be in seconds)" if times[-1] > 100 * duration else ""
+        raise ImplausibleSignals(f"{signals.source}: the signals cover {times[0]:g} to {times[-1]:g} s, but the rollout lasts 0 to {duration:g} s{unit}")
+    if not 1 / RATE_FACTOR <= period * rate <= RATE_FACTOR:
+        raise ImplausibleSignals(f"{signals.source}: one sample every {period:g} s, but the rollout is recorded at {rate:g} samples/s (every {1 / rate:g} s)")
+    uneven = np.abs(steps - period) > UNIFORM_TOLERANCE * period
+    if uneven.any():
+        index = int(np.argmax(uneven)) + 1
+        raise ImplausibleSignals(
+            f"{_row(signals, index)}: {steps[index - 1]:g} s after the sample before it, but the samples are {period:g} s apart elsewhere; record at uniform times"
+        )
+
+
+def _check_positions(signals: SignalTable, scene: Scene) -> None:
+    if scene.safety is None:
+        return
+    lower = np.array(scene.safety.lower) - POSITION_MARGIN
+    upper = np.array(scene.safety.upper) + POSITION_MARGIN
+    positions = np.column_stack([signals.columns[axis] for axis in "xyz"])
+    outside = np.any((positions < lower) | (positions > upper), axis=1)
+    if outside.any():
+        index = int(np.argmax(outside))
+        point = ", ".join(f"{axis}={value:.4g}" for axis, value in zip("xyz", positions[index]))
+        raise ImplausibleSignals(
+            f"{_row(signals, index)}: the hand at ({point}) is more than {POSITION_MARGIN:g} m outside the scene's workspace; not a recording of this robot"
+        )
+
+
+def _check_force(signals: SignalTable, scene: Scene) -> None:
+    if "force" not in signals.columns:
+        return
+    limit = scene.safety.max_force if scene.safety is not None and scene.safety.max_force is not None else DEFAULT_MAX_FORCE
+    force = np.abs(signals.columns["force"])
+    if np.any(force > limit):
+        index = int(np.argmax(force > limit))
+        raise ImplausibleSignals(
+            f"{_row(signals, index)}: a force of {signals.columns['force'][index]:.4g} N, above the {limit:g} N a recording may show (the scene's safety.max_force)"
+        )
