@@ -175,7 +175,7 @@ def learn(
     min_spread: str = typer.Option(
         "auto",
         "--min-spread",
-        help="Least spread of a state: POSITION,ANGLE,DURATION with units (5mm,3deg,10%); auto: that for a single demonstration, none otherwise; none.",
+        help="Least spread of a state: POSITION,ANGLE,DURATION with units (5mm,5deg,10%); auto: that for a single demonstration, none otherwise; none.",
     ),
 ) -> None:
     """Learn a skill model (HSMM) from demonstrations and write the model file.
@@ -195,7 +195,7 @@ def learn(
         stlopt learn demos/insert -o insert.npz --frames shaft,holder
 
     One demonstration does not vary, so by itself it would give states the optimiser cannot
-    move; --min-spread (auto) then widens every state to at least 5 mm and 3 degrees, and
+    move; --min-spread (auto) then widens every state to at least 5 mm and 5 degrees, and
     every duration to at least 10 % of its mean.
     """
     from stl_lfd.files import atomic_output, check_output_file

@@ -57,6 +57,7 @@ def write(tmp_path: Path, text: str) -> Path:
         ("scene: s\nsteps: []\n", "'steps' must be a non-empty list"),
         ("steps:\n  - {skill: a, demos: demos}\n", "missing key 'scene'"),
         ("scene: s\nsteps:\n  - {skill: a, demos: demos, learn_in: holder}\n", r"'steps\[0\].learn_in' must list the frames"),
+        ("scene: s\nsteps:\n  - {skill: a, demos: demos, min_spread: 5mm}\n", r"'steps\[0\].min_spread' 5mm: give auto, none, or a position"),
     ],
 )
 def test_bad_behaviour_files_name_the_file_and_the_step(tmp_path, text, message):
@@ -101,7 +102,7 @@ def test_the_unoptimised_behaviour_picks_then_pushes_the_shaft_onto_the_holder(p
             assert np.array_equal(runs[0].columns[name], other.columns[name]), name
 
 
-def test_a_skill_from_one_demonstration_learned_in_its_object_frame():
+def test_a_skill_from_one_demonstration_learned_in_its_object_frame(tmp_path):
     from stl_lfd.hsmm import TPHSMM
     from stl_lfd.skill.behaviour import behaviour_models
 
@@ -110,3 +111,7 @@ def test_a_skill_from_one_demonstration_learned_in_its_object_frame():
     models = behaviour_models(behaviour)
     assert isinstance(models["insert"], TPHSMM) and models["insert"].frame_names_ == ["holder"]
     assert models["insert"].min_spread is not None  # one demonstration: widened
+    narrower = load_behaviour(
+        write(tmp_path, f"scene: s\nsteps:\n  - {{skill: a, demos: {ROOT / 'demos' / 'pick_lying' / 'demo_01.csv'}, min_spread: [2mm, 1deg, 5%]}}\n")
+    )
+    assert behaviour_models(narrower)["a"].min_spread.position == pytest.approx(0.002)

@@ -6,7 +6,7 @@ optimiser may move it (bounds of `beta` standard deviations). One demonstration 
 a state where the hand rests gets a covariance of a fraction of a millimetre and a duration
 of one sample's spread, so the optimiser could move nothing. `MinimumSpread` widens every
 state to at least a given standard deviation in every direction, the prior a user would give
-("this could be 5 mm, 3 degrees or 10 % longer elsewhere").
+("this could be 5 mm, 5 degrees or 10 % longer elsewhere").
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ class MinimumSpread:
 
 
 # What `stlopt learn` uses when it is given a single demonstration.
-ONE_DEMONSTRATION = MinimumSpread(position=0.005, angle=math.radians(3.0), duration=0.1)
+ONE_DEMONSTRATION = MinimumSpread(position=0.005, angle=math.radians(5.0), duration=0.1)
 
 
 def widened(covariances: np.ndarray, stds: np.ndarray) -> np.ndarray:
@@ -64,7 +64,7 @@ _UNITS = {"position": {"mm": 0.001, "m": 1.0}, "angle": {"deg": math.pi / 180.0,
 
 
 def parse_min_spread(text: str, option: str = "--min-spread") -> MinimumSpread | None | str:
-    """`auto`, `none`, or `POSITION,ANGLE,DURATION` with units (`5mm,3deg,10%`; also `m`,
+    """`auto`, `none`, or `POSITION,ANGLE,DURATION` with units (`5mm,5deg,10%`; also `m`,
     `rad`) -> what `learn` takes. ModelError naming `option` otherwise."""
     cleaned = text.strip().lower()
     if cleaned in ("auto", "none"):
@@ -79,7 +79,7 @@ def parse_min_spread(text: str, option: str = "--min-spread") -> MinimumSpread |
                 break
             values.append(number * units[unit])
     if len(values) != 3:
-        raise ModelError(f"{option} {text}: give auto, none, or a position, an angle and a share of the duration, with units, such as 5mm,3deg,10%")
+        raise ModelError(f"{option} {text}: give auto, none, or a position, an angle and a share of the duration, with units, such as 5mm,5deg,10%")
     return MinimumSpread(*values)
 
 

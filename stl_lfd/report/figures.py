@@ -313,6 +313,12 @@ def contact_forces(run: RunData) -> Figure | None:
         axes.plot(tables[0].times, tables[0].columns["force"], color=INITIAL, ls="--", label="unoptimised")
     if run.best is not None and run.best.trial in tables:
         axes.plot(tables[run.best.trial].times, tables[run.best.trial].columns["force"], color=BEST, lw=2, label="best")
-    axes.set(xlabel="t (s)", ylabel="contact force (N)", title="contact force per trial")
+    title = "contact force per trial"
+    shown = [tables[number].columns["force"] for number in (0, run.best.trial if run.best is not None else None) if number in tables]
+    highest = max((float(np.max(force)) for force in shown), default=0.0)
+    if highest > 0 and max(float(np.max(table.columns["force"])) for table in tables.values()) > 2.0 * highest:
+        axes.set_ylim(-0.05 * highest, 1.5 * highest)  # other trials' collisions would flatten the two that matter
+        title += " (other trials' peaks cut off)"
+    axes.set(xlabel="t (s)", ylabel="contact force (N)", title=title)
     axes.legend(loc="best")
     return figure

@@ -23,8 +23,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from stl_lfd.errors import ConfigError
+from stl_lfd.errors import ConfigError, ModelError
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
+from stl_lfd.hsmm.spread import MinimumSpread, parse_min_spread
 from stl_lfd.poses import Pose
 from stl_lfd.rotations import DOWN
 from stl_lfd.sim import TIME_STEP, Reference
@@ -44,6 +45,7 @@ class SkillStep:
     settle: float
     frames: tuple[tuple[str, str], ...] = ()  # (model frame, scene frame) bindings
     learn_in: tuple[str, ...] | None = None  # the frames to learn in (None: base and every sidecar frame)
+    min_spread: MinimumSpread | None | str = "auto"  # as `stlopt learn --min-spread`
 
     def poses(self, scene_poses: Mapping[str, Pose]) -> dict[str, Pose]:
         """Model frame -> pose, from the scene's frame poses and this step's bindings."""
@@ -99,7 +101,7 @@ def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:
         if item["action"] not in ACTIONS:
             raise ConfigError(f"{path}: '{where}.action' must be one of {', '.join(ACTIONS)} (got {shown(item['action'])})")
         return ActionStep(item["action"], number(item.get("seconds", 1.0), path, f"{where}.seconds", positive=True))
-    check_keys(item, ("skill", "demos", "model", "states", "settle", "frames", "learn_in"), path, where, required=("skill",))
+    check_keys(item, ("skill", "demos", "model", "states", "settle", "frames", "learn_in", "min_spread"), path, where, required=("skill",))
     if ("demos" in item) == ("model" in item):
         raise ConfigError(f"{path}: '{where}' needs exactly one of 'demos' (a folder to learn from) or 'model' (a model file)")
     source_key = "demos" if "demos" in item else "model"
@@ -114,6 +116,7 @@ def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:
         settle=number(item.get("settle", DEFAULT_SETTLE), path, f"{where}.settle", minimum=0.0),
         frames=_bindings(item.get("frames", {}), path, f"{where}.frames"),
         learn_in=_frame_names(item["learn_in"], path, f"{where}.learn_in") if "learn_in" in item else None,
+        min_spread=_min_spread(item.get("min_spread", "auto"), path, f"{where}.min_spread"),
     )
 
 
@@ -129,6 +132,13 @@ def _frame_names(data: Any, path: Path, where: str) -> tuple[str, ...]:
     return tuple(data)
 
 
+def _min_spread(data: Any, path: Path, where: str) -> MinimumSpread | None | str:
+    try:
+        return parse_min_spread(",".join(str(value) for value in data) if isinstance(data, list) else str(data), f"'{where}'")
+    except ModelError as error:
+        raise ConfigError(f"{path}: {error}") from None
+
+
 def behaviour_models(behaviour: Behaviour) -> dict[str, HSMM]:
     """The model of every skill, learned from its demonstrations or loaded."""
     return {step.name: _model(step) for step in behaviour.skills}
@@ -137,7 +147,8 @@ def behaviour_models(behaviour: Behaviour) -> dict[str, HSMM]:
 def _model(step: SkillStep) -> HSMM:
     if step.demos is None:
         return load_model(step.model)
-    return learn_from_folder(step.demos, step.states, frames=list(step.learn_in) if step.learn_in is not None else None)[0]
+    frames = list(step.learn_in) if step.learn_in is not None else None
+    return learn_from_folder(step.demos, step.states, frames=frames, min_spread=step.min_spread)[0]
 
 
 def behaviour_reference(

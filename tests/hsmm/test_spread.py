@@ -55,7 +55,7 @@ def test_learning_from_one_csv_says_it_widened_the_states(tmp_path):
 
     result = CliRunner().invoke(app, ["learn", str(ONE), "-o", str(tmp_path / "one.npz")])
     assert result.exit_code == 0, result.output
-    assert "states widened to at least 5 mm and 3 degrees, durations to 10 % of their means (--min-spread)" in result.stderr
+    assert "states widened to at least 5 mm and 5 degrees, durations to 10 % of their means (--min-spread)" in result.stderr
     assert "(1 demonstration, K = 6" in result.stderr
     bad = CliRunner().invoke(app, ["learn", str(ONE), "-o", str(tmp_path / "x.npz"), "--min-spread", "5mm"])
     assert bad.exit_code != 0 and "Traceback" not in bad.output and not (tmp_path / "x.npz").exists()
