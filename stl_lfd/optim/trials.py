@@ -94,16 +94,41 @@ def describe_error(error: Exception) -> str:
     return message
 
 
+# A value further than this many scales (the interquartile range, or the median's magnitude if
+# larger) beyond the quartiles is absurd: wrong by orders of magnitude, not merely bad.
+OUTLIER_SCALES = 1e4
+
+
+def without_outliers(values: np.ndarray) -> np.ndarray:
+    """`values` (`n`, or `n x m` column by column) with absurd ones (a robustness of -1e300, or
+    +1e308, from a broken recording) replaced by the worst ordinary value, as failed trials
+    enter: one such value would otherwise stretch the GP's standardisation until every other
+    value looks the same. A part that saturates has a tiny interquartile range, so the scale is
+    at least the median's magnitude, and a collision's force of -78 N among margins of 2 N is
+    bad, not absurd: ordinary runs never come near the bound."""
+    values = np.asarray(values, dtype=float)
+    if len(values) < 4:
+        return values
+    lower, median, upper = np.percentile(values, [25, 50, 75], axis=0)
+    scale = np.maximum(np.maximum(upper - lower, np.abs(median)), 1e-9)
+    absurd = (values < lower - OUTLIER_SCALES * scale) | (values > upper + OUTLIER_SCALES * scale)
+    if not absurd.any():
+        return values
+    worst = np.min(np.where(absurd, np.inf, values), axis=0)
+    return np.where(absurd, worst, values)
+
+
 def observations(history: Sequence[Trial]) -> tuple[np.ndarray, np.ndarray]:
     """`n x d` points and `n` values for the GP. A failed trial enters with the worst robustness
-    observed, so that the model learns to avoid its region instead of proposing it again."""
+    observed, so that the model learns to avoid its region instead of proposing it again;
+    outliers are clipped (`without_outliers`)."""
     succeeded = [trial.robustness for trial in history if trial.robustness is not None]
     if not succeeded:
         return np.empty((0, len(history[0].x) if history else 0)), np.empty(0)
     worst = min(succeeded)
     X = np.array([trial.x for trial in history])
     Y = np.array([trial.robustness if trial.robustness is not None else worst for trial in history])
-    return X, Y
+    return X, without_outliers(Y)
 
 
 def part_observations(history: Sequence[Trial], names: tuple[str, ...], recorded_as: str = "components") -> np.ndarray | None:
@@ -126,4 +151,4 @@ def part_observations(history: Sequence[Trial], names: tuple[str, ...], recorded
         worst, best = np.nanmin(finite, axis=0), np.nanmax(finite, axis=0)
     # An infinite part (an empty window) is clipped to the values seen, so the GP sees numbers.
     worst, best = np.nan_to_num(worst, nan=0.0), np.nan_to_num(best, nan=0.0)
-    return np.array([np.clip(row, worst, best) if row is not None else worst for row in rows], dtype=float)
+    return without_outliers(np.array([np.clip(row, worst, best) if row is not None else worst for row in rows], dtype=float))
