@@ -42,3 +42,27 @@ def interrupt(process: subprocess.Popen) -> tuple[str, str]:
     masks = [line for line in status.read_text().splitlines() if line.startswith(("SigBlk", "SigIgn", "SigCgt"))]
     process.kill()
     pytest.fail(f"the process went on through 10 SIGINTs ({'; '.join(masks)})")
+
+
+def worker_processes(parent: int) -> list[int]:
+    """The multiprocessing workers `parent` spawned (not its resource tracker)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+            command = (entry / "cmdline").read_bytes().replace(b"\0", b" ")
+        except OSError:
+            continue
+        if int(stat.rsplit(")", 1)[1].split()[1]) == parent and b"spawn_main" in command:
+            found.append(int(entry.name))
+    return found
+
+
+def alive(pid: int) -> bool:
+    """Whether `pid` runs (a zombie does not)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False

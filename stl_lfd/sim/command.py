@@ -14,7 +14,7 @@ Placeholders in the command's arguments: `{reference}`, `{signals}` (the two pat
 
 The command runs without a shell (an argument list; a string is split as a shell would) unless
 `shell` is set, in its own process group, so that a timeout or Ctrl-C stops it with everything
-it started.
+it started; what it leaves running when it exits is stopped too, after every execution.
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ import shutil
 import signal
 import subprocess
 import tempfile
+import time
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -205,6 +206,7 @@ def run_command(command: Command, values: dict[str, str], folder: Path) -> None:
         except BaseException:  # Ctrl-C: nothing the command started may outlive us
             stop_process_group(process)
             raise
+        stop_process_group(process)  # what it started and left behind ends with the execution
     if status < 0:
         raise ExecutionError(f"the command was killed by {signal.Signals(-status).name}{_last_words(folder)}")
     if status != 0:
@@ -212,26 +214,27 @@ def run_command(command: Command, values: dict[str, str], folder: Path) -> None:
 
 
 def stop_process_group(process: subprocess.Popen) -> None:
-    """SIGTERM to the process's group, SIGKILL after `STOP_GRACE` seconds if still running."""
-    for stop, wait in ((signal.SIGTERM, STOP_GRACE), (signal.SIGKILL, None)):
-        try:
-            os.killpg(process.pid, stop)
-        except ProcessLookupError:
-            pass
-        try:
-            process.wait(timeout=wait)
-            break
-        except subprocess.TimeoutExpired:
-            continue
-    _reap_group(process.pid)
-
-
-def _reap_group(group: int) -> None:
-    """Kill what is left of the group (children that ignored SIGTERM after their parent died)."""
+    """SIGTERM to the process's group (the command and everything it started), SIGKILL to what
+    is left after `STOP_GRACE` seconds."""
+    _signal_group(process.pid, signal.SIGTERM)
     try:
-        os.killpg(group, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
+        process.wait(timeout=STOP_GRACE)
+    except subprocess.TimeoutExpired:
         pass
+    deadline = time.monotonic() + STOP_GRACE
+    while _signal_group(process.pid, 0) and time.monotonic() < deadline:  # its children, ending
+        time.sleep(0.02)
+    _signal_group(process.pid, signal.SIGKILL)
+    process.wait()
+
+
+def _signal_group(group: int, number: int) -> bool:
+    """Send signal `number` to the process group; whether it still had a member."""
+    try:
+        os.killpg(group, number)
+    except (ProcessLookupError, PermissionError):
+        return False
+    return True
 
 
 def tracking_error(signals: SignalTable, reference: Reference) -> np.ndarray:

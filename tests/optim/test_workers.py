@@ -124,3 +124,56 @@ def test_ctrl_c_stops_the_workers_and_the_run_resumes(tmp_path, learned_model_fi
     resumed = subprocess.run(command + ["-N", str(kept + 3), "--resume"], capture_output=True, text=True)
     assert resumed.returncode == 0, resumed.stderr
     assert [json.loads(line)["trial"] for line in trials.read_text().splitlines()] == list(range(1, kept + 4))
+
+
+def _started_with_workers(tmp_path, learned_model_file):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from tests.processes import wait_for, worker_processes
+
+    task = small_task(tmp_path, learned_model_file)
+    stlopt = str(Path(sys.executable).parent / "stlopt")
+    command = [stlopt, "optimize", str(task), "--out", str(tmp_path / "run"), "--workers", "2"]
+    process = subprocess.Popen(command + ["-N", "500"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    trials = tmp_path / "run" / "trials.jsonl"
+    wait_for(lambda: trials.exists() and len(trials.read_text().splitlines()) >= 4, timeout=300)
+    workers = worker_processes(process.pid)
+    assert len(workers) == 2
+    return process, command, trials, workers
+
+
+@pytest.mark.slow
+@pytest.mark.heavy
+def test_a_killed_worker_stops_the_run_with_one_line_and_it_resumes(tmp_path, learned_model_file):
+    import os
+    import signal
+    import subprocess
+
+    process, command, trials, workers = _started_with_workers(tmp_path, learned_model_file)
+    os.kill(workers[0], signal.SIGKILL)
+    out, err = process.communicate(timeout=120)
+    assert process.returncode != 0 and "Traceback" not in err, err
+    assert [line for line in err.splitlines() if line.startswith("error")] == [next(line for line in err.splitlines() if "a worker process died" in line)], err
+    from stl_lfd.optim.runs.lock import RunLock
+
+    RunLock.acquire(tmp_path / "run", tmp_path / "run").release()  # not held: the next command may write
+    kept = len(trials.read_text().splitlines())
+    resumed = subprocess.run(command + ["-N", str(kept + 2), "--resume"], capture_output=True, text=True)
+    assert resumed.returncode == 0, resumed.stderr
+    assert [json.loads(line)["trial"] for line in trials.read_text().splitlines()] == list(range(1, kept + 3))
+
+
+@pytest.mark.slow
+@pytest.mark.heavy
+def test_the_workers_end_when_the_main_process_is_killed(tmp_path, learned_model_file):
+    import os
+    import signal
+
+    from tests.processes import alive, wait_for
+
+    process, _, _, workers = _started_with_workers(tmp_path, learned_model_file)
+    os.kill(process.pid, signal.SIGKILL)
+    process.communicate(timeout=60)
+    wait_for(lambda: not any(alive(pid) for pid in workers), timeout=30)

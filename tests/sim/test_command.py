@@ -241,3 +241,12 @@ def test_ctrl_c_stops_the_executor_with_its_children_and_keeps_the_trials(tmp_pa
     assert "the finished trials are kept" in err and "Traceback" not in err
     wait_for(lambda: not _alive(child), timeout=10.0)
     assert [trial["trial"] for trial in trials_of(tmp_path / "run")] == [1, 2]
+
+
+def test_what_a_command_leaves_running_is_stopped_after_every_execution(tmp_path):
+    from stl_lfd.sim.command import Command, run_command
+    from tests.processes import alive
+
+    script = "sleep 300 & echo $! > left.pid"
+    run_command(Command.parse(script, shell=True, cwd=tmp_path), {}, tmp_path)
+    assert not alive(int((tmp_path / "left.pid").read_text()))

@@ -16,6 +16,7 @@ import tarfile
 import tempfile
 import warnings
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
@@ -91,6 +92,10 @@ def local_map(function: Callable[[Any], Any], items: Iterable[Any], jobs: int) -
     try:
         for future in as_completed(futures):
             yield futures[future], future.result()
+    except BrokenProcessPool:
+        stop_children()
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise RunError("a worker process died (killed, or crashed); the cells in flight are lost: run the same command again to do the missing ones") from None
     except BaseException:  # Ctrl-C or a failed item: stop the workers now, not after their items
         stop_children()
         pool.shutdown(wait=True, cancel_futures=True)
@@ -133,10 +138,11 @@ def ray_results(cells: Iterable[Cell], address: str | None) -> Iterator[CellResu
 
 def _start_worker() -> None:
     """A local worker: one thread; stopped by SIGTERM, its cell's scratch folder is removed."""
-    from stl_lfd.optim.runs.workers import THREAD_VARIABLES, stop_on_sigterm
+    from stl_lfd.optim.runs.workers import THREAD_VARIABLES, stop_on_sigterm, watch_parent
 
     os.environ.update({name: "1" for name in THREAD_VARIABLES})
     stop_on_sigterm()
+    watch_parent()
 
 
 def run_sweep(

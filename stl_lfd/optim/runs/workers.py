@@ -5,23 +5,32 @@ Workers are spawned, not forked (forking after torch or pybullet started threads
 deadlock), run single-threaded, and are given the task and models once, at start-up. Each
 batch of `(x, trial)` pairs is executed one pair per worker; the outcomes come back in the
 batch's order, a failure as its message.
+
+A worker that dies (killed, or crashed in native code) stops the run with one error line; the
+trials in flight are lost, as with Ctrl-C, and `--resume` continues exactly. Workers watch
+their parent and end themselves when it is gone (killed with SIGKILL, say), stopping their
+executor commands first.
 """
 
 from __future__ import annotations
 
 import multiprocessing
 import os
+import threading
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Callable
 
 import numpy as np
 
+from stl_lfd.errors import RunError
 from stl_lfd.optim.trials import Outcome, describe_error
 
 _objective = None  # the worker process's own objective, built by `_start`
 _busy = False  # whether the worker is evaluating a trial (a stop then unwinds it first)
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")  # one thread per worker
 WORKER_NICENESS = 10
+PARENT_CHECK_SECONDS = 1.0  # how often a worker checks that the process that started it lives
 
 
 class WorkerPool:
@@ -46,11 +55,18 @@ class WorkerPool:
     def __call__(self, points: list[tuple[np.ndarray, int]]) -> Callable[[], list[Outcome | str]]:
         """Start evaluating each `(x, trial number)`; returns the function that waits for the
         outcomes (or error messages), in order."""
-        futures = [self.pool.submit(_evaluate, x, trial) for x, trial in points]
+        try:
+            futures = [self.pool.submit(_evaluate, x, trial) for x, trial in points]
+        except BrokenProcessPool:
+            self.stop()
+            raise _died(points) from None
 
         def wait() -> list[Outcome | str]:
             try:
                 return [future.result() for future in futures]
+            except BrokenProcessPool:
+                self.stop()
+                raise _died(points) from None
             except BaseException:  # Ctrl-C: the trials in flight are lost, as with one worker
                 self.stop()
                 raise
@@ -66,11 +82,21 @@ class WorkerPool:
         self.pool.shutdown(wait=True, cancel_futures=True)
 
 
+def _died(points: list[tuple[np.ndarray, int]]) -> RunError:
+    numbers = [trial for _, trial in points]
+    trials = f"trial {numbers[0]}" if len(numbers) == 1 else f"trials {numbers[0]} to {numbers[-1]}"
+    return RunError(
+        f"a worker process died (killed, or crashed) while running {trials}; those trials are lost and the run stops here: "
+        "continue it with the same command and --resume"
+    )
+
+
 def _start(make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]]) -> None:
     global _objective
     import warnings
 
     stop_on_sigterm()
+    watch_parent()
     # The next batch's proposal (in the main process) runs beside the batch's rollouts and is the
     # longer of the two: the rollouts yield the CPU to it, so that it never waits behind them.
     os.nice(WORKER_NICENESS)
@@ -96,6 +122,21 @@ def stop_on_sigterm() -> None:
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, _terminated)
+
+
+def watch_parent(period: float = PARENT_CHECK_SECONDS) -> None:
+    """In a worker process: end it (through SIGTERM, so that its work unwinds) once the process
+    that started it is gone, which no signal tells a child when the parent is SIGKILLed."""
+    import signal
+
+    parent = os.getppid()
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            threading.Event().wait(period)
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
 
 
 def run_stoppable(function: Callable[..., Any], *args: Any) -> Any:
