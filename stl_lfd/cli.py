@@ -11,6 +11,7 @@ import dataclasses
 import json
 import math
 import os
+import shlex
 import signal
 import sys
 import warnings
@@ -552,11 +553,12 @@ def ask(
     print(asked.reference)
     what = "the unoptimised skill" if asked.trial == 0 else "an initial trial, chosen on its plan" if asked.phase == "design" else f"chosen by {asked.phase}"
     state = "still pending" if asked.again else "to execute"
-    print(f"trial {asked.trial} ({what}) {state}; then: stlopt tell {run_dir} SIGNALS.csv", file=sys.stderr)
+    print(f"trial {asked.trial} ({what}) {state}; then: stlopt tell {shlex.quote(str(run_dir))} SIGNALS.csv", file=sys.stderr)
 
 
 @app.command(cls=_PlainUsage)
 def tell(
+    context: typer.Context,
     run_dir: Path = typer.Argument(..., metavar="RUN_DIR", help="The run directory that 'stlopt ask' handed the trial out of."),
     signals: Optional[Path] = typer.Argument(None, metavar="SIGNALS_CSV", help="The signals recorded while executing the pending trial."),
     failed: Optional[str] = typer.Option(None, "--failed", help="Record the pending trial as failed, with this reason, instead of signals."),
@@ -572,9 +574,11 @@ def tell(
     """
     from stl_lfd.optim.runs.asktell import tell as tell_trial
 
+    if (signals is None) == (failed is None):  # mistakes in the command line itself: usage, exit 2
+        context.fail("give the signals CSV of the pending trial, or --failed REASON (not both)")
+    if failed is not None and not failed.strip():
+        context.fail("--failed needs a reason, such as --failed 'protective stop at t = 4 s'")
     with user_errors():
-        if (signals is None) == (failed is None):
-            raise ConfigError("give the signals CSV of the pending trial, or --failed REASON (not both)")
         told = tell_trial(run_dir, signals, failed)
     summary = told.summary
     number = told.trial.trial if told.trial is not None else 0
@@ -588,9 +592,9 @@ def tell(
         print(f"trial {number} failed: {told.trial.error}", file=sys.stderr)
     else:
         print(f"trial {number}: robustness {told.robustness:+.5f} ({'satisfied' if told.robustness > 0 else 'violated'})", file=sys.stderr)
-    left = summary.budget - summary.trials
+    left = max(summary.budget - summary.trials, 0)
     best = f"best so far: trial {summary.best_trial} ({summary.best_robustness:+.5f})" if summary.best_trial is not None else "no successful trial yet"
-    print(f"{best}; {left} trials left" + (f": stlopt ask {run_dir}" if left > 0 else ""), file=sys.stderr)
+    print(f"{best}; {left} trial{'' if left == 1 else 's'} left" + (f": stlopt ask {shlex.quote(str(run_dir))}" if left > 0 else ""), file=sys.stderr)
 
 
 @app.command(cls=_PlainUsage)

@@ -71,6 +71,26 @@ def _edit_json_line(number: int, **changes) -> Callable[[Path], None]:
     return damage
 
 
+def ask_one_more(run: Path) -> None:
+    """Hand out one more trial of the finished run (a pending trial to tell)."""
+    from stl_lfd.optim.runs.asktell import ask
+
+    ask(run, trials=4)
+
+
+def recording(times=None, **columns) -> str:
+    """A recording of the workspace task (22 s at 50 samples/s) holding still in front of the
+    robot, with `columns` (name -> function of the row index and time) replaced."""
+    times = [index / 50 for index in range(1101)] if times is None else times
+    values = {"x": lambda i, t: 0.5, "y": lambda i, t: 0.0, "z": lambda i, t: 0.4, "force": lambda i, t: 0.0} | columns
+    rows = [",".join(["t"] + list(values))] + [",".join([repr(t)] + [repr(float(value(i, t))) for value in values.values()]) for i, t in enumerate(times)]
+    return "\n".join(rows) + "\n"
+
+
+def tell_case(id: str, text: str, message: str, code: int = 4) -> Case:
+    return Case(id, ["tell", "{case}/run", "{case}/s.csv"], code, message, {"s.csv": text}, damage=ask_one_more)
+
+
 DAMAGES: dict[str, tuple[Callable[[Path], None], str]] = {
     "empty-trials": (lambda run: (run / "trials.jsonl").write_text(""), "no successful trial yet"),
     "nan-robustness": (_edit_json_line(1, robustness=float("nan")), "damaged (robustness nan)"),
@@ -313,12 +333,12 @@ CASES = [
         {"t.yaml": task_text(spec="q.stl"), "q.stl": "phi := F q > 0\n"},
     ),
     task_case("cli-seed-huge", "must be from 0 to 4294967295", extra=["--seed", "99999999999999"]),
-    task_case("cli-init-above-iterations", "exceeds 'optimizer.trials'", extra=["--init", "9", "--iterations", "4"]),
+    task_case("cli-init-above-iterations", "error: --init 9 exceeds --iterations 4, the total", extra=["--init", "9", "--iterations", "4"]),
     task_case("cli-iterations-zero", "must be at least 1", extra=["--iterations", "0"]),
     task_case("cli-spec-missing", "no such specification file", code=3, extra=["--spec", "{case}/nope.stl"]),
     task_case("cli-method-unknown", "magic", code=2, extra=["--method", "magic"]),
     Case("out-under-file", ["optimize", "{task}", "--out", "{case}/f.txt/run"], 8, "is a file", {"f.txt": "x"}),
-    Case("out-is-file", ["optimize", "{task}", "--out", "{case}/f.txt"], 9, "the run directory exists", {"f.txt": "x"}),
+    Case("out-is-file", ["optimize", "{task}", "--out", "{case}/f.txt"], 9, "f.txt: is a file, not a run directory", {"f.txt": "x"}),
     Case("out-is-existing-run", ["optimize", "{task}", "--out", "{run}"], 9, "the run directory exists; continue it with --resume"),
     # --- resuming ---------------------------------------------------------------------------
     Case("resume-missing", ["optimize", "{task}", "--out", "{case}/nope", "--resume"], 9, "no such run directory"),
@@ -420,12 +440,117 @@ CASES = [
         {"s.yaml": "description: x\nsafety: {workspace: {lower: [0, 0, 0], upper: [1, 1, 1]}}\n"},
     ),
     Case("tell-nothing-pending", ["tell", "{run}", "{csv}"], 9, "no trial is pending; hand out the next one with: stlopt ask"),
-    Case("tell-no-signals", ["tell", "{run}"], 5, "give the signals CSV of the pending trial, or --failed REASON"),
+    Case("tell-no-signals", ["tell", "{run}"], 2, "give the signals CSV of the pending trial, or --failed REASON"),
     Case("tell-missing-run", ["tell", "{case}/nope", "{csv}"], 9, "no such run directory"),
     Case("ask-run-with-seed", ["ask", "{run}", "--seed", "3"], 5, "a run directory keeps its own settings"),
     Case("ask-not-a-run", ["ask", "{case}"], 9, "not a run directory of stlopt optimize"),
     Case("ask-damaged-design", ["ask", "{case}/run"], 9, "design.json: damaged", damage=lambda run: (run / "design.json").write_text("[[0.1,")),
     Case("ask-task-missing", ["ask", "{case}/nope.yaml", "--out", "{case}/out"], 5, "no such YAML file"),
+    # --- what comes back from a robot (stlopt tell): implausible recordings ---------------------
+    tell_case("tell-absurd-everywhere", recording(x=lambda i, t: 1e300), "s.csv:2: the hand at (x=1e+300"),
+    tell_case("tell-absurd-one-sample", recording(z=lambda i, t: 1e308 if i == 40 else 0.4), "s.csv:42: the hand at (x=0.5, y=0, z=1e+308)"),
+    tell_case("tell-a-metre-off", recording(y=lambda i, t: 1.5), "more than 0.25 m outside the scene's workspace"),
+    tell_case("tell-below-the-floor", recording(z=lambda i, t: -0.5), "s.csv:2: the hand at (x=0.5, y=0, z=-0.5)"),
+    tell_case(
+        "tell-milliseconds",
+        recording(times=[index * 20.0 for index in range(1101)]),
+        "0 to 22000 s, but the rollout lasts 0 to 22 s (times must be in seconds)",
+    ),
+    tell_case("tell-past-the-end", recording(times=[index / 25 for index in range(1101)]), "the signals cover 0 to 44 s, but the rollout lasts 0 to 22 s"),
+    tell_case("tell-short", recording(times=[index / 50 for index in range(200)]), "the signals cover 0 to 3.98 s"),
+    tell_case("tell-late-start", recording(times=[5 + index / 50 for index in range(1101)]), "the signals cover 5 to 27 s"),
+    tell_case("tell-one-sample", "t,x,y,z,force\n0,0.5,0,0.4,0\n", "1 sample; a recording needs at least 2"),
+    tell_case("tell-coarse", recording(times=[float(index) for index in range(23)]), "one sample every 1 s, but the rollout is recorded at 50 samples/s"),
+    tell_case("tell-uneven", recording(times=[index / 50 + (0.005 if index >= 500 else 0.0) for index in range(1101)]), "s.csv:502:"),
+    tell_case("tell-backwards", recording(times=[index / 50 if index != 300 else 1.0 for index in range(1101)]), "s.csv:302: time must be strictly increasing"),
+    tell_case("tell-crushing-force", recording(force=lambda i, t: 5e4 if i == 7 else 0.0), "s.csv:9: a force of 5e+04 N, above the 1000 N"),
+    tell_case("tell-negative-force", recording(force=lambda i, t: -2e6), "a force of -2e+06 N"),
+    tell_case("tell-nan", recording().replace("\n0.5,", "\nnan,", 1).replace("0.0,0.5,0.0", "0.0,nan,0.0", 1), "s.csv:2: column 'x' is nan"),
+    tell_case("tell-inf", recording().replace("0.0,0.5,0.0", "0.0,inf,0.0", 1), "s.csv:2: column 'x' is inf"),
+    tell_case("tell-no-x", "t,y,z\n0,0,0.4\n1,0,0.4\n", "missing column 'x'"),
+    tell_case("tell-empty-file", "", "empty"),
+    tell_case("tell-text-force", recording().replace(",0.0\n", ",heavy\n", 1), "s.csv:2: column 'force' has 'heavy', not a number"),
+    tell_case("tell-duplicate-column", "t,x,y,z,x\n0,0.5,0,0.4,0.5\n", "duplicate column 'x'"),
+    Case("ask-iterations-zero", ["ask", "{case}/run", "-N", "0"], 5, "--iterations 0 must be at least 1", damage=lambda run: None),
+    Case("tell-empty-reason", ["tell", "{case}/run", "--failed", ""], 2, "--failed needs a reason", damage=ask_one_more),
+    Case("tell-blank-reason", ["tell", "{case}/run", "--failed", "  "], 2, "--failed needs a reason", damage=ask_one_more),
+    Case("tell-signals-and-failed", ["tell", "{case}/run", "{csv}", "--failed", "x"], 2, "(not both)", damage=ask_one_more),
+    Case("tell-no-arguments", ["tell"], 2, "Missing argument 'RUN_DIR'"),
+    Case("tell-csv-missing", ["tell", "{case}/run", "{case}/nope.csv"], 4, "nope.csv", damage=ask_one_more),
+    # --- object placements, executors, options -----------------------------------------------
+    Case(
+        "place-below-the-floor",
+        ["optimize", str(ROOT / "configs" / "phi3.yaml"), "--place", "holder=0.6,0.2,-3", "--out", "{case}/out"],
+        5,
+        "--place: holder at z = -3 puts holder_left below the floor",
+    ),
+    Case(
+        "task-place-below-the-floor",
+        ["optimize", "{case}/t.yaml", "--out", "{case}/out"],
+        5,
+        "'place': holder at z = -1 puts holder_left below the floor",
+        {
+            "t.yaml": f"spec: {PHI1}\nbehaviour: {ROOT / 'configs' / 'behaviours' / 'pick_insert.yaml'}\nduration: 48\nplace: {{holder: [0.6, 0.2, -1]}}\nparameters: {{insert: {{durations: {{components: all}}}}}}\n"
+        },
+    ),
+    task_case(
+        "task-command-placeholder",
+        "the command has the placeholder {signal}, which stlopt does not know",
+        backend="command",
+        command="'run {reference} {signal}'",
+    ),
+    task_case("task-command-shell-placeholder", "placeholder {refrence}", backend="command", command="{run: 'exec {refrence}', shell: true}"),
+    task_case("task-scene-relative", "'scene' names ../scenes/s.yaml, which does not exist (paths are relative to the task file)", scene="../scenes/s.yaml"),
+    task_case("optimize-workers-zero", "--workers 0 must be from 1 to 256", extra=["--workers", "0"]),
+    task_case("optimize-iterations-zero", "--iterations 0 must be at least 1", extra=["-N", "0"]),
+    Case(
+        "scene-max-force",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml", "--backend", "kinematic"],
+        5,
+        "'safety.max_force' must be positive",
+        {"s.yaml": "description: x\nsafety: {workspace: {lower: [0, 0, 0], upper: [1, 1, 1]}, max_speed: 1, max_force: -5}\n"},
+    ),
+    Case(
+        "scene-symmetry",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml", "--backend", "kinematic"],
+        5,
+        "'frames.cup.symmetry' must be a whole number",
+        {
+            "s.yaml": "description: x\nobjects:\n  - {name: a, shape: box, size: [0.01, 0.01, 0.01], position: [0.5, 0, 0.02]}\nframes:\n  cup: {position: [0.5, 0, 0.02], objects: [a], symmetry: 2.5}\n"
+        },
+    ),
+    Case(
+        "learn-min-spread", ["learn", "{demos}", "-o", "{case}/m.npz", "--min-spread", "5mm,3deg"], 6, "--min-spread 5mm,3deg: give auto, none, or a position"
+    ),
+    Case("learn-min-spread-units", ["learn", "{demos}", "-o", "{case}/m.npz", "--min-spread", "5cm,3deg,10%"], 6, "such as 5mm,5deg,10%"),
+    Case(
+        "learn-not-a-csv",
+        ["learn", "{case}/d.txt", "-o", "{case}/m.npz"],
+        4,
+        "no such folder of demonstrations (or demonstration CSV file)",
+        {"d.txt": "t,x\n"},
+    ),
+    Case(
+        "behaviour-learn-in",
+        ["rollout", "{case}/b.yaml", "--backend", "kinematic"],
+        5,
+        "'steps[0].learn_in' must list the frames",
+        {"b.yaml": f"scene: free_space\nsteps:\n  - {{skill: a, demos: {ROOT / 'demos' / 'three_regions'}, learn_in: base}}\n"},
+    ),
+    Case(
+        "behaviour-min-spread",
+        ["rollout", "{case}/b.yaml", "--backend", "kinematic"],
+        5,
+        "'steps[0].min_spread' 5mm: give auto, none, or a position",
+        {"b.yaml": f"scene: free_space\nsteps:\n  - {{skill: a, demos: {ROOT / 'demos' / 'three_regions'}, min_spread: 5mm}}\n"},
+    ),
+    Case(
+        "behaviour-scene-relative",
+        ["rollout", "{case}/b.yaml", "--backend", "kinematic"],
+        5,
+        "'scene' names scenes/s.yaml, which does not exist (paths are relative to the behaviour file)",
+        {"b.yaml": f"scene: scenes/s.yaml\nsteps:\n  - {{skill: a, demos: {ROOT / 'demos' / 'three_regions'}}}\n"},
+    ),
     # Sweeps
     Case("sweep-missing", ["sweep", "{case}/nope.yaml", "--out", "{case}/out"], 5, "no such YAML file"),
     Case("sweep-unknown-key", ["sweep", "{case}/s.yaml", "--out", "{case}/out"], 5, "unknown key 'jobs'", {"s.yaml": "tasks: [t.yaml]\njobs: 2\n"}),

@@ -152,6 +152,8 @@ def frame_poses(model: HSMM, assignments: list[str], source: str | Path, option:
         if name not in frames:
             known = f"its frames: {', '.join(frames)}" if frames else "it was learned without frames"
             raise ModelError(f"{option} {text}: the model {source} has no frame '{name}' ({known})")
+        if name in poses:
+            raise ModelError(f"{option} {text}: {name} is placed twice")
         poses[name] = pose
     missing = [name for name in frames if name not in poses]
     if missing:

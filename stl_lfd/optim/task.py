@@ -114,8 +114,17 @@ class Overrides:
         try:
             optimizer = replace(task.optimizer, **{key: value for key, value in given.items() if key in OPTIMIZER_KEYS})
         except ConfigError as error:
-            raise ConfigError(f"{task.source}: {error}") from None
+            raise self._attributed(str(error), task.source) from None
         return replace(task, optimizer=optimizer, **{key: value for key, value in given.items() if key not in OPTIMIZER_KEYS})
+
+    def _attributed(self, message: str, source: Path) -> ConfigError:
+        """An optimizer setting's error, naming the options given where the message is about them
+        (`--workers 0 must be ...`), and the task file only where it is about the file's keys."""
+        for key, value in self.given().items():
+            message = message.replace(f"'optimizer.{key}' ({value})", f"{self.option(key)} {value}").replace(
+                f"'optimizer.{key}'", f"{self.option(key)} {value}"
+            )
+        return ConfigError(message if "'optimizer." not in message else f"{source}: {message}")
 
     @staticmethod
     def option(name: str) -> str:
@@ -191,7 +200,7 @@ def parse_task(data: dict[str, Any], path: Path) -> Task:
         demos=_existing(base, data["demos"], path, "demos") if "demos" in data else None,
         behaviour=behaviour,
         states=integer(data.get("states", 6), path, "states", minimum=1, maximum=MAX_STATES),
-        scene=str(data.get("scene", _behaviour_scene(behaviour) if behaviour else "free_space")),
+        scene=_scene(base, data["scene"], path) if "scene" in data else _behaviour_scene(behaviour) if behaviour else "free_space",
         backend=backend,
         semantics=semantics,
         nu=number(data.get("nu", 1.0), path, "nu", positive=True),
@@ -214,6 +223,14 @@ def _behaviour_scene(behaviour: Path) -> str:
     from stl_lfd.skill.behaviour import load_behaviour
 
     return load_behaviour(behaviour).scene
+
+
+def _scene(base: Path, value: Any, path: Path) -> str:
+    """A built-in scene's name, or a scene file's path (relative to the task file's folder)."""
+    text = str(value)
+    if text.endswith((".yaml", ".yml")) or "/" in text:
+        return str(_existing(base, text, path, "scene"))
+    return text
 
 
 def _placements(data: dict[str, Any], path: Path, scene_name: str) -> tuple[dict[str, Pose], ...]:

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from stl_lfd.errors import RunError
 from stl_lfd.files import atomic_output
 from stl_lfd.optim.runs.sweep import RUNS_DIR, Group, aggregate, read_table
 
@@ -73,8 +74,12 @@ def write_sweep_figure(out: Path) -> Path:
 
     matplotlib.use("Agg")
     path = Path(out) / FIGURE_FILE
+    try:
+        figure = sweep_figure(out)  # read first: a damaged cell is an input's fault, not the figure's
+    except OSError as error:
+        raise RunError(f"{error.filename or out}: cannot read ({error.strerror or error})") from None
     with atomic_output(path) as temporary:
-        sweep_figure(out).savefig(temporary, dpi=100)
+        figure.savefig(temporary, dpi=100)
     return path
 
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shlex
 import shutil
 import signal
@@ -77,6 +78,10 @@ class Command:
                 raise ConfigError(f"the command {text!r} cannot be split into arguments ({error})") from None
         if not run or not run[0].strip():
             raise ConfigError("the command is empty")
+        unknown = sorted({name for argument in run for name in re.findall(r"(?<![$\\{]){([A-Za-z_][A-Za-z0-9_]*)}", argument)} - set(PLACEHOLDERS))
+        if unknown:
+            known = ", ".join("{" + name + "}" for name in PLACEHOLDERS)
+            raise ConfigError(f"the command has the placeholder {{{unknown[0]}}}, which stlopt does not know (its placeholders: {known})")
         if not timeout > 0:
             raise ConfigError(f"the command's timeout must be positive (got {timeout})")
         return cls(run, float(timeout), shell, cwd)

@@ -78,11 +78,11 @@ def check_reference(reference: Reference, safety: Safety) -> None:
             f"unsafe reference, not executed: at t = {times[index]:.3f} s it reaches {_point(point)}, outside the workspace ({AXES[axis]} {bound})"
         )
     speeds = np.linalg.norm(np.diff(positions, axis=0), axis=1) / np.diff(times)
-    _check_rate(speeds, safety.max_speed, "it moves at {rate:.3f} m/s", "max_speed of {limit:g} m/s", times, positions)
+    _check_rate(speeds, safety.max_speed, "it moves at {rate} m/s", "max_speed of {limit:g} m/s", times, positions)
     if safety.max_angular_speed is not None and reference.orientations is not None:
         turns = reference.orientations
         angular = np.linalg.norm(rotations.log_map(turns[:-1], turns[1:]), axis=1) / np.diff(times)
-        _check_rate(angular, safety.max_angular_speed, "the hand turns at {rate:.3f} rad/s", "max_angular_speed of {limit:g} rad/s", times, positions)
+        _check_rate(angular, safety.max_angular_speed, "the hand turns at {rate} rad/s", "max_angular_speed of {limit:g} rad/s", times, positions)
 
 
 def _check_rate(rates: np.ndarray, limit: float, doing: str, allowed: str, times: np.ndarray, positions: np.ndarray) -> None:
@@ -91,9 +91,14 @@ def _check_rate(rates: np.ndarray, limit: float, doing: str, allowed: str, times
     if too_fast.any():
         index = int(np.argmax(too_fast))
         raise UnsafeReference(
-            f"unsafe reference, not executed: at t = {times[index]:.3f} s {doing.format(rate=rates[index])} near {_point(positions[index])}, "
+            f"unsafe reference, not executed: at t = {times[index]:.3f} s {doing.format(rate=_rate(rates[index]))} near {_point(positions[index])}, "
             f"faster than the scene's {allowed.format(limit=limit)}"
         )
+
+
+def _rate(rate: float) -> str:
+    """Three decimals, or three significant digits for a rate too small to show in decimals."""
+    return f"{rate:.3f}" if rate >= 0.001 else f"{rate:.3g}"
 
 
 def _point(point: np.ndarray) -> str:

@@ -230,6 +230,17 @@ class Scene:
             if not pose.turns_about_z_only:
                 raise ConfigError(f"{source}: {name}: a scene turns its objects about z only; give a yaw, not an orientation")
             _check_area(frames[name], pose, source)
+            self._check_above_floor(frames[name], pose, source)
+
+    def _check_above_floor(self, frame: SceneFrame, pose: Pose, source: str) -> None:
+        """ConfigError when placing `frame` at `pose` puts one of its objects' centres below the floor."""
+        objects = {item.name: item for item in self.objects}
+        for name in frame.objects:
+            height = pose.position[2] + objects[name].position[2] - frame.pose.position[2]
+            if height < 0:
+                raise ConfigError(
+                    f"{source}: {frame.name} at z = {pose.position[2]:g} puts {name} below the floor (its centre at z = {height:g}; the scene has it at {objects[name].position[2]:g})"
+                )
 
     def frame_object_orientation(self, frame: SceneFrame) -> np.ndarray:
         """The orientation (quaternion) of the frame's first object, or of the frame itself when

@@ -91,7 +91,17 @@ def load_behaviour(path: str | Path) -> Behaviour:
         raise ConfigError(f"{path}: 'steps' has no skill")
     if len(set(names)) != len(names):
         raise ConfigError(f"{path}: skill names must be unique (got {', '.join(names)})")
-    return Behaviour(str(data.get("description", path.stem)), str(data["scene"]), parsed, path)
+    return Behaviour(str(data.get("description", path.stem)), _scene(str(data["scene"]), path), parsed, path)
+
+
+def _scene(text: str, path: Path) -> str:
+    """A built-in scene's name, or a scene file's path (relative to the behaviour file)."""
+    if not (text.endswith((".yaml", ".yml")) or "/" in text):
+        return text
+    resolved = Path(text) if Path(text).is_absolute() else path.parent / text
+    if not resolved.exists():
+        raise ConfigError(f"{path}: 'scene' names {text}, which does not exist (paths are relative to the behaviour file)")
+    return str(resolved)
 
 
 def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:

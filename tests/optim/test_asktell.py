@@ -263,3 +263,16 @@ def test_absurd_signals_are_refused_and_the_next_ask_is_what_it_would_have_been(
             tell(run, signals)
         proposals[name] = (ask(run).trial, read_reference_csv(ask(run).reference).positions.tolist(), recorded(run))
     assert proposals["poisoned"] == proposals["plain"]
+
+
+def test_ask_with_more_iterations_extends_the_budget_that_tell_counts(tmp_path, learned_model_file):
+    _, first = start(tmp_path, learned_model_file, trials=3)
+    run = tmp_path / "asked"
+    tell(run, execute_kinematically(first.reference))
+    loop(run)
+    asked = runner.invoke(app, ["ask", str(run), "-N", "5"])
+    assert asked.exit_code == 0, asked.stderr
+    told = runner.invoke(app, ["tell", str(run), str(execute_kinematically(Path(asked.stdout.strip())))])
+    assert told.exit_code == 0, told.stderr
+    assert f"1 trial left: stlopt ask {run}" in told.stderr
+    assert json.loads((run / "summary.json").read_text())["budget"] == 5

@@ -98,8 +98,9 @@ def ask(
         task = run.task()
         if file_task is not None:
             check_resume(Path(out), task, run.inputs(), file_task, given)
-        if trials is not None:
+        if trials is not None and trials != task.optimizer.trials:
             task = task.with_overrides(trials=trials)
+            run.write_task(task)  # the budget `tell` and `report` count with, as --resume -N extends a run
         pending = _live_pending(run)
         if pending is not None:
             return Asked(pending.trial, _reference_path(run.path, pending.trial), pending.phase, again=True)

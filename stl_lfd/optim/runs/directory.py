@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
 from stl_lfd.errors import ConfigError, RunError
 from stl_lfd.files import check_output_folder, write_atomically
@@ -102,6 +103,10 @@ class RunDirectory:
 
     def task(self) -> Task:
         return load_task(self.path / TASK_FILE)
+
+    def write_task(self, task: Task) -> None:
+        """Replace the run's task (a new budget of trials)."""
+        write_atomically(self.path / TASK_FILE, yaml.safe_dump(task.to_yaml_dict(), sort_keys=False))
 
     def models(self) -> dict[str, HSMM]:
         """The unoptimised skills by name (`skill` for a single-skill run)."""
@@ -222,7 +227,9 @@ def model_file(base: str, skill: str) -> str:
 def check_new_run_path(path: Path) -> None:
     """Refuse, before any work, a run path that exists (and is not an empty folder) or cannot
     be created and written."""
-    if path.exists() and (not path.is_dir() or any(path.iterdir())):
+    if path.exists() and not path.is_dir():
+        raise RunError(f"{path}: is a file, not a run directory; choose another with --out")
+    if path.exists() and any(path.iterdir()):
         raise RunError(f"{path}: the run directory exists; continue it with --resume or choose another with --out")
     check_output_folder(path, "run directory")
 

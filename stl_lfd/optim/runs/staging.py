@@ -5,18 +5,18 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
-from stl_lfd.errors import OutputError
+from stl_lfd.errors import OutputError, StlLfdError
 from stl_lfd.files import folder_mode, write_atomically
 from stl_lfd.hsmm import HSMM, save_model
-from stl_lfd.optim.runs.directory import DESIGN_FILE, INPUTS_FILE, MODEL_FILE, SIGNALS_DIR, TASK_FILE, TRIALS_FILE, RunDirectory, check_new_run_path, model_file
+from stl_lfd.optim.runs.directory import DESIGN_FILE, INPUTS_FILE, MODEL_FILE, SIGNALS_DIR, TRIALS_FILE, RunDirectory, check_new_run_path, model_file
 from stl_lfd.optim.runs.lock import RunLock
 from stl_lfd.optim.runs.records import Pending
 from stl_lfd.optim.summary import Summary
@@ -65,7 +65,7 @@ class StagedRun:
         `design` (`M x d`)."""
         staging = self.path
         run = RunDirectory(staging)
-        write_atomically(staging / TASK_FILE, yaml.safe_dump(task.to_yaml_dict(), sort_keys=False))
+        run.write_task(task)
         if inputs is not None:
             write_atomically(staging / INPUTS_FILE, json.dumps(inputs, indent=2) + "\n")
         for skill, model in models.items():
@@ -90,8 +90,19 @@ class StagedRun:
     def __enter__(self) -> "StagedRun":
         return self
 
-    def __exit__(self, *exception: object) -> None:
+    def __exit__(self, kind: object, error: BaseException | None, trace: object) -> None:
         if not self.committed:
             if self.lock is not None:
                 self.lock.release()
             shutil.rmtree(self.path, ignore_errors=True)
+            if isinstance(error, StlLfdError) and error.args and str(self.path) in str(error.args[0]):
+                error.args = (_without_paths_into(str(error.args[0]), self.path),) + error.args[1:]
+
+
+def _without_paths_into(message: str, folder: Path) -> str:
+    """`message` without the references to files in `folder`, which is gone (an executor's
+    `(see .../stderr.txt)`): the message keeps what they said, and says nothing was created."""
+    inside = re.escape(str(folder)) + r"[^)\s]*"
+    message = re.sub(r" \(see " + inside + r"\)", "", message)
+    message = re.sub(r" \(nothing on stderr: " + inside + r"\)", " (nothing on stderr)", message)
+    return re.sub(inside, "(removed)", message) + "; the run directory was not created"
