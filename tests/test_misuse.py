@@ -71,11 +71,13 @@ def _edit_json_line(number: int, **changes) -> Callable[[Path], None]:
     return damage
 
 
-def ask_one_more(run: Path) -> None:
-    """Hand out one more trial of the finished run (a pending trial to tell)."""
-    from stl_lfd.optim.runs.asktell import ask
+ASKED_RUN: list[Path] = []  # the workspace's run with one more trial handed out (set by `workspace`)
 
-    ask(run, trials=4)
+
+def ask_one_more(run: Path) -> None:
+    """Make `run` the finished run with one more trial handed out (a pending trial to tell)."""
+    shutil.rmtree(run)
+    shutil.copytree(ASKED_RUN[0], run)
 
 
 def recording(times=None, **columns) -> str:
@@ -601,6 +603,11 @@ def workspace(tmp_path_factory, learned_model_file) -> dict[str, Path]:
     slow_skill = load_model(learned_model_file)
     slow_skill.duration_means_[:] = 1e9  # states that last 30 years: retrieval would need terabytes
     save_model(slow_skill, folder / "slow.npz")
+    from stl_lfd.optim.runs.asktell import ask
+
+    shutil.copytree(folder / "run", folder / "asked")
+    ask(folder / "asked", trials=4)
+    ASKED_RUN[:] = [folder / "asked"]
     return {"model": learned_model_file, "task": task, "run": folder / "run", "slow_model": folder / "slow.npz"}
 
 
