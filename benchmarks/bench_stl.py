@@ -1,14 +1,20 @@
-"""STL robustness: the paper's specs on a 20 s trace at 240 Hz, batches, and scaling in trace
-length and window width."""
+"""STL robustness: the paper's specs on a 20 s trace at 240 Hz, batches, scaling in trace
+length and window width, and specifications of megabytes (flat conjunctions, many definitions,
+nesting at the limit)."""
 
 from __future__ import annotations
 
+import random
+import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
 
 from benchmarks._timing import Row, median_seconds, print_table
 from stl_lfd.stl import compile_spec, load_spec, parse
+from stl_lfd.stl.evaluate import evaluate_file
+from stl_lfd.stl.parser import MAX_DEPTH
 
 ROOT = Path(__file__).resolve().parent.parent
 RATE_HZ = 240
@@ -63,9 +69,58 @@ def scaling_rows() -> list[Row]:
     return rows
 
 
+def conjunction_text(count: int) -> str:
+    """`s > 0.5 & s > 1.5 & ...`: about 15 bytes a predicate."""
+    return " & ".join(f"s > {i}.5" for i in range(count)) + "\n"
+
+
+def definitions_text(count: int) -> str:
+    """`dN := dM | s > K` with M drawn among the earlier definitions (seeded), the last one the
+    specification: about 25 bytes a definition."""
+    rng = random.Random(0)
+    lines = ["d0 := s > 0"] + [f"d{i} := d{rng.randrange(i)} | s > {i % 97}" for i in range(1, count)]
+    return "\n".join(lines) + "\n"
+
+
+def nested_text(count: int) -> str:
+    """`count` formulas `G[0, 0.01] G[0, 0.01] ... (s > 0 & (s > 0 & ...))` nested to the limit, in
+    one conjunction."""
+    levels = (MAX_DEPTH - 3) // 2
+    formula = "G[0, 0.01] " * levels + "(s > 0 & " * levels + "s > 1" + ")" * levels
+    return " & ".join([f"({formula})"] * count) + "\n"
+
+
+def size_rows() -> list[Row]:
+    """`stlopt robustness` without the process start (`evaluate_file`: read, parse, check,
+    inline, compile, evaluate) on generated specifications, each timed once. The note gives
+    seconds per megabyte and its ratio to the same shape at a tenth of the size: 1.0 is linear."""
+    signal = Path(__file__).resolve().parent.parent / "examples" / "s1.csv"
+    cases = [
+        ("conjunction of predicates", conjunction_text, 34_000, "predicates"),
+        ("definitions using earlier ones", definitions_text, 12_000, "definitions"),
+        (f"nesting at the limit ({MAX_DEPTH} levels)", nested_text, 60, "formulas"),
+    ]
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        for name, make, small, unit in cases:
+            per_megabyte = []
+            for count in (small, 10 * small):
+                path = Path(folder) / "spec.stl"
+                path.write_text(make(count))
+                megabytes = path.stat().st_size / 1e6
+                start = time.perf_counter()
+                evaluate_file(path, signal)
+                seconds = time.perf_counter() - start
+                per_megabyte.append(seconds / megabytes)
+            note = f"{per_megabyte[1]:.2f} s/MB, {per_megabyte[1] / per_megabyte[0]:.2f}x the s/MB at {megabytes / 10:.2f} MB"
+            rows.append(Row(name, f"{10 * small:,} {unit}, {megabytes:.1f} MB", seconds, note=note))
+    return rows
+
+
 def main() -> None:
     print_table("STL robustness: the paper's specifications", spec_rows())
     print_table("STL robustness: scaling (classic cost linear in length, flat in window width)", scaling_rows())
+    print_table("STL specifications of megabytes: parse and evaluate in time linear in their size", size_rows())
 
 
 if __name__ == "__main__":

@@ -26,13 +26,14 @@ how far each trial was from satisfying it another way.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from stl_lfd.stl import ast
+from stl_lfd.stl.parser import resolve
 from stl_lfd.stl.printer import format_formula
 from stl_lfd.stl.robustness import Robustness, Semantics, SemanticsName, compile_spec
 
@@ -97,9 +98,9 @@ def split_spec(spec: ast.Spec | ast.Formula, semantics: SemanticsName | Semantic
     top = _follow(spec, spec.formula)
     operands = top.operands if isinstance(top, ast.And) else (top,)
     names = _unique([format_formula(operand) for operand in operands])
-    functions = tuple(compile_spec(replace(spec, formula=operand), semantics, source=source) for operand in operands)
+    functions = tuple(compile_spec(resolve(spec, operand), semantics, source=source) for operand in operands)
     routes = tuple(
-        Route(index, format_formula(route), compile_spec(replace(spec, formula=route), semantics, source=source))
+        Route(index, format_formula(route), compile_spec(resolve(spec, route), semantics, source=source))
         for index, operand in enumerate(operands)
         for route in _routes(spec, operand)
     )

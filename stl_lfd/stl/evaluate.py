@@ -8,7 +8,7 @@ from pathlib import Path
 
 from stl_lfd.errors import SignalError, SpecError
 from stl_lfd.signals import SignalTable, read_signal_csv
-from stl_lfd.stl import compile_spec, load_spec
+from stl_lfd.stl import ast, compile_spec, load_spec
 
 
 @dataclass(frozen=True)
@@ -48,13 +48,16 @@ class Evaluation:
 
 def evaluate_file(spec_path: str | Path, signal_path: str | Path, semantics: str = "classic", nu: float = 1.0) -> Evaluation:
     """Load, compile and evaluate; raises `StlLfdError` subclasses on bad input."""
-    load_spec(spec_path)  # a bad spec is reported before a bad signal file
-    return evaluate_table(spec_path, read_signal_csv(signal_path), semantics, nu)
+    spec = load_spec(spec_path)  # a bad spec is reported before a bad signal file
+    return _evaluate(spec, spec_path, read_signal_csv(signal_path), semantics, nu)
 
 
 def evaluate_table(spec_path: str | Path, table: SignalTable, semantics: str = "classic", nu: float = 1.0) -> Evaluation:
     """Robustness of an in-memory signal table against a specification file."""
-    spec = load_spec(spec_path)
+    return _evaluate(load_spec(spec_path), spec_path, table, semantics, nu)
+
+
+def _evaluate(spec: ast.Spec, spec_path: str | Path, table: SignalTable, semantics: str, nu: float) -> Evaluation:
     function = compile_spec(spec, semantics, nu, source=str(spec_path))
     try:
         value = function(table.columns, table.times)

@@ -2,22 +2,38 @@
 
 Entry points: `parse(text, source)` for text, `load_spec(path)` for files (which also follows
 `include` lines), and `resolve(spec)` to inline defined names into one formula.
+
+Specifications of any size parse in time linear in their length: Lark's LALR parser calls the
+transformer as it reduces each rule (no parse tree is built), and parsing, checking, inlining,
+printing and compiling walk the tree with their own stacks. Nesting is limited to `MAX_DEPTH`
+levels, counted through defined names, which keeps what does recurse (evaluating, at most two
+stack frames a level; Python's own comparison, repr and pickling of trees, about four) well
+within Python's recursion limit of 1000. The parser notes the first operator past the limit;
+the names are then followed, and a deeper specification is refused with one line naming the
+file, line and column.
 """
 
 from __future__ import annotations
 
 import ast as python_ast
 import math
+import threading
 from functools import cache
 from pathlib import Path
 
 from lark import Lark, Token, Transformer, v_args
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from stl_lfd.dag import fold
 from stl_lfd.errors import SpecError, StlNameError, StlSyntaxError, caret_context
 from stl_lfd.files import UnreadableFile, read_text
 from stl_lfd.stl import ast
+
+# Operator nesting, counted through defined names (a predicate `x > 0` is 2 levels: the
+# comparison and its operands); deeper specifications are refused. Real ones nest about 20.
+MAX_DEPTH = 200
+_TOO_DEEP = f"the specification nests more than {MAX_DEPTH} levels deep (counting through its definitions); simplify it"
+
+_SHOWN_COLUMNS = 120  # of a source line shown under an error
 
 _READABLE_TERMINALS = {
     "NAME": "a name",
@@ -29,8 +45,13 @@ _READABLE_TERMINALS = {
 
 
 @cache
-def _parser() -> Lark:
-    return Lark.open("stl.lark", rel_to=__file__, parser="lalr", propagate_positions=True, cache=True)
+def _parser() -> tuple[Lark, "_ToAst"]:
+    transformer = _ToAst()
+    lark = Lark.open("stl.lark", rel_to=__file__, parser="lalr", transformer=transformer, keep_all_tokens=True, cache=True)
+    return lark, transformer
+
+
+_PARSING = threading.Lock()  # the transformer names the source of the text being parsed
 
 
 def parse(text: str, source: str = "<string>", base_dir: Path | None = None) -> ast.Spec:
@@ -42,7 +63,8 @@ def parse(text: str, source: str = "<string>", base_dir: Path | None = None) -> 
         base_dir: folder that `include` paths are relative to (default: the current folder).
 
     Returns:
-        The `Spec`, with definitions checked: no duplicates, no undefined or recursive names.
+        The `Spec`, with definitions checked: no duplicates, no undefined or recursive names,
+        nesting within `MAX_DEPTH`.
 
     Raises:
         StlSyntaxError, StlNameError: with line, column and a caret under the offending text.
@@ -56,17 +78,39 @@ def load_spec(path: str | Path) -> ast.Spec:
     return _parse(_read(path, str(path)), str(path), path.parent, including=())
 
 
-def resolve(spec: ast.Spec) -> ast.Formula:
-    """The specification formula with every defined name replaced by its definition."""
-    definitions = {definition.name: definition.formula for definition in spec.definitions}
+def resolve(spec: ast.Spec, formula: ast.Formula | None = None) -> ast.Formula:
+    """The specification formula (or `formula`, a part of it) with every defined name
+    replaced by its definition.
 
-    @cache
-    def inline(node: ast.Node) -> ast.Node:
+    A definition used several times becomes one shared subtree (the result is a directed
+    acyclic graph), so inlining takes time linear in the specification's size.
+    """
+    formula = spec.formula if formula is None else formula
+
+    def below(node: ast.Node) -> tuple[ast.Node, ...]:  # names are never inside a predicate
         if isinstance(node, ast.Ref):
-            return inline(definitions[node.name])
-        return _rebuild(node, tuple(inline(child) for child in node.children()))
+            return (spec.definition(node.name),)
+        return () if isinstance(node, (ast.Compare, ast.InRange)) else node.children()
 
-    return inline(spec.formula)
+    inlined: dict[int, ast.Node] = {}
+    with ast.collector_paused():
+        for node in ast.post_order(formula, below):
+            children = below(node)
+            if isinstance(node, ast.Ref):
+                inlined[id(node)] = inlined[id(children[0])]
+            elif not children:
+                inlined[id(node)] = node
+            else:
+                new = [inlined[id(child)] for child in children]
+                changed = any(new_child is not child for new_child, child in zip(new, children))
+                inlined[id(node)] = _rebuild(node, tuple(new)) if changed else node
+    return inlined[id(formula)]  # type: ignore[return-value]
+
+
+def nesting_depth(spec: ast.Spec) -> int:
+    """How deeply the specification's formula nests operators once its names are inlined
+    (a predicate `x > 0` is 2 levels). Names must not be recursive (see `_check_names`)."""
+    return _depths(spec)[id(spec.formula)]
 
 
 # --- Helper functions -----------------------------------------------------------------------
@@ -79,43 +123,8 @@ def _read(path: Path, shown: str) -> str:
         raise SpecError(str(error), shown) from None
 
 
-MAX_DEPTH = 200  # operator nesting, through defined names; deeper formulas are refused
-
-
 def _parse(text: str, source: str, base_dir: Path, including: tuple[Path, ...]) -> ast.Spec:
-    try:
-        spec = _parse_checked(text, source, base_dir, including)
-    except RecursionError:
-        spec = None
-    if spec is None or nesting_depth(spec) > MAX_DEPTH:
-        raise StlSyntaxError(f"the specification nests more than {MAX_DEPTH} levels deep (counting through its definitions); simplify it", source)
-    return spec
-
-
-def nesting_depth(spec: ast.Spec) -> int:
-    """How deeply the specification's formula nests operators once its names are inlined,
-    counted without recursion (names must not be recursive: see `_check_names`)."""
-    definitions = {definition.name: definition.formula for definition in spec.definitions}
-
-    def below(node: ast.Node) -> tuple[ast.Node, ...]:
-        return (definitions[node.name],) if isinstance(node, ast.Ref) else node.children()
-
-    def depth(node: ast.Node, depths: list[int]) -> int:
-        return (0 if isinstance(node, ast.Ref) else 1) + max(depths, default=0)
-
-    return fold(spec.formula, below, depth)
-
-
-def _parse_checked(text: str, source: str, base_dir: Path, including: tuple[Path, ...]) -> ast.Spec:
-    try:
-        tree = _parser().parse(text)
-        includes, definitions, formula = _ToAst(source).transform(tree)
-    except UnexpectedInput as error:
-        raise _syntax_error(error, text, source) from None
-    except VisitError as error:
-        if isinstance(error.orig_exc, SpecError):
-            raise error.orig_exc.located(source, text) from None
-        raise
+    includes, definitions, formula, too_deep, uses_names = _parse_text(text, source)
     included: list[ast.Definition] = []
     for include_path, line in includes:
         included.extend(_include(include_path, line, text, source, base_dir, including))
@@ -130,17 +139,67 @@ def _parse_checked(text: str, source: str, base_dir: Path, including: tuple[Path
     try:
         _check_names(spec)
     except SpecError as error:
-        raise error.located(error.source, text if error.source == source else None) from None
+        raise _placed(error, error.source, text if error.source == source else None) from None
+    if too_deep is not None:  # one line, without the source line (it may be megabytes long)
+        raise StlSyntaxError(_TOO_DEEP, source, *too_deep)
+    if uses_names:  # else the parser has checked the depth
+        _check_depth(spec)
     return spec
+
+
+def _parse_text(text: str, source: str):
+    """(includes as (path, line), definitions, final formula or None, (line, column) past the
+    nesting limit or None, whether a formula uses a defined name) of one text."""
+    lark, transformer = _parser()
+    try:
+        with _PARSING, ast.collector_paused():
+            transformer.reset(source)
+            includes, definitions, formula = lark.parse(text)
+            error, too_deep, uses_names = transformer.error, transformer.too_deep, transformer.uses_names
+    except UnexpectedInput as syntax:
+        raise _syntax_error(syntax, text, source) from None
+    if error is not None:
+        raise _placed(error, source, text)
+    return includes, definitions, formula, too_deep, uses_names
+
+
+def _depths(spec: ast.Spec) -> dict[int, int]:
+    """id(node) -> nesting depth, for the nodes of the specification's formula and of the
+    definitions it uses (a name is as deep as its definition)."""
+
+    def below(node: ast.Node) -> tuple[ast.Node, ...]:
+        return (spec.definition(node.name),) if isinstance(node, ast.Ref) else node.children()
+
+    depths: dict[int, int] = {}
+    for node in ast.post_order(spec.formula, below):
+        deepest = max([depths[id(child)] for child in below(node)], default=0)
+        depths[id(node)] = deepest if isinstance(node, ast.Ref) else 1 + deepest
+    return depths
+
+
+def _check_depth(spec: ast.Spec) -> None:
+    """Refuse a formula nesting more than `MAX_DEPTH` levels through its definitions, at the
+    first use of a name that takes it past the limit (each text alone is within the limit,
+    which the parser checks as it goes)."""
+    depths = _depths(spec)
+    if depths[id(spec.formula)] <= MAX_DEPTH:
+        return
+    stack: list[tuple[ast.Node, int]] = [(spec.formula, 0)]  # (node, levels above it)
+    while stack:
+        node, above = stack.pop()
+        if isinstance(node, ast.Ref) and above + depths[id(node)] > MAX_DEPTH:
+            raise StlSyntaxError(_TOO_DEEP, node.source, node.line, node.column)
+        stack.extend((child, above + 1) for child in reversed(node.children()))
+    raise AssertionError("a formula too deep through its definitions has a name that makes it so")
 
 
 def _include(include_path: str, line: int, text: str, source: str, base_dir: Path, including: tuple[Path, ...]) -> tuple[ast.Definition, ...]:
     path = (base_dir / include_path).resolve()
     if path in including:
-        raise StlNameError(f"circular include of '{include_path}'", source, line, 1).located(source, text)
+        raise _placed(StlNameError(f"circular include of '{include_path}'", source, line, 1), source, text)
     if not path.is_file():
         problem = "is a folder, not a specification file" if path.is_dir() else "does not exist"
-        raise StlNameError(f"included file '{include_path}' {problem}", source, line, 1).located(source, text)
+        raise _placed(StlNameError(f"included file '{include_path}' {problem}", source, line, 1), source, text)
     shown = str(Path(source).parent / include_path) if source != "<string>" else include_path
     spec = _parse(_read(path, shown), shown, path.parent, including + (path,))
     return spec.definitions
@@ -164,13 +223,37 @@ def _syntax_error(error: UnexpectedInput, text: str, source: str) -> StlSyntaxEr
         if error.token.type == "$END":
             lines = text.splitlines() or [""]
             line, column = len(lines), len(lines[-1]) + 1
-    return StlSyntaxError(message, source, line, column, caret_context(text, line, column))
+    return StlSyntaxError(message, source, line, column, _context(text, line, column))
+
+
+def _placed(error: SpecError, source: str, text: str | None) -> SpecError:
+    """`error` naming `source` and showing the offending line of `text` (default: the file)."""
+    if text is None and not error.context and error.line:
+        try:
+            text = Path(source).read_text()
+        except (OSError, UnicodeDecodeError):
+            text = None
+    context = _context(text, error.line, error.column) if text is not None else error.context
+    return type(error)(error.message, source, error.line, error.column, context)
+
+
+def _context(text: str, line: int, column: int) -> str:
+    """The line and a caret under the column, cut to `_SHOWN_COLUMNS` around the column when
+    longer (a generated specification may be megabytes on one line)."""
+    lines = text.splitlines()
+    if not 1 <= line <= len(lines) or len(lines[line - 1]) <= _SHOWN_COLUMNS:
+        return caret_context(text, line, column)
+    source_line = lines[line - 1]
+    start = max(0, min(column - 1 - _SHOWN_COLUMNS // 2, len(source_line) - _SHOWN_COLUMNS))
+    stop = start + _SHOWN_COLUMNS
+    shown = ("..." if start else "") + source_line[start:stop] + ("..." if stop < len(source_line) else "")
+    return caret_context(shown, 1, column - start + (3 if start else 0))
 
 
 def _readable(terminal: str) -> str:
     if terminal in _READABLE_TERMINALS:
         return _READABLE_TERMINALS[terminal]
-    pattern = _parser().get_terminal(terminal).pattern
+    pattern = _parser()[0].get_terminal(terminal).pattern
     return repr(pattern.value) if pattern.type == "str" else terminal.lower()
 
 
@@ -206,7 +289,9 @@ def _check_names(spec: ast.Spec) -> None:
                 1,
             )
         definitions[definition.name] = definition
-    bodies = [definition.formula for definition in spec.definitions] + [spec.formula]
+    bodies = [definition.formula for definition in spec.definitions]
+    if spec.name is None:  # a bare formula; else it is the last definition's
+        bodies.append(spec.formula)
     for node in (node for body in bodies for node in body.walk()):
         if isinstance(node, ast.Ref) and node.name not in definitions:
             raise StlNameError(
@@ -226,22 +311,32 @@ def _check_names(spec: ast.Spec) -> None:
 
 
 def _check_recursion(definitions: dict[str, ast.Definition]) -> None:
+    """A depth-first search of the names each definition uses, with its own stack (a chain of
+    many definitions must not exhaust Python's)."""
     finished: set[str] = set()
+    for root in definitions:
+        if root in finished:
+            continue
+        path, on_path = [root], {root}
+        pending = [_names_used(definitions[root])]
+        while pending:
+            name = next(pending[-1], None)
+            if name is None:
+                pending.pop()
+                on_path.discard(path[-1])
+                finished.add(path.pop())
+            elif name in on_path:
+                cycle = path[path.index(name) :] + [name]
+                definition = definitions[cycle[0]]
+                raise StlNameError(f"recursive definition: {' -> '.join(cycle)}", definition.source, definition.line, 1)
+            elif name not in finished:
+                path.append(name)
+                on_path.add(name)
+                pending.append(_names_used(definitions[name]))
 
-    def visit(name: str, path: tuple[str, ...]) -> None:
-        if name in path:
-            cycle = path[path.index(name) :] + (name,)
-            definition = definitions[cycle[0]]
-            raise StlNameError(f"recursive definition: {' -> '.join(cycle)}", definition.source, definition.line, 1)
-        if name in finished:
-            return
-        for node in definitions[name].formula.walk():
-            if isinstance(node, ast.Ref):
-                visit(node.name, path + (name,))
-        finished.add(name)
 
-    for name in definitions:
-        visit(name, ())
+def _names_used(definition: ast.Definition):
+    return (node.name for node in definition.formula.walk() if isinstance(node, ast.Ref))
 
 
 class _Name:
@@ -251,106 +346,160 @@ class _Name:
         self.name, self.line, self.column, self.source = name, line, column, source
 
 
-@v_args(inline=True, meta=True)
+class _Part:
+    """A piece of the specification on the parser's stack: its value (a syntax-tree node, a
+    `_Name`, an interval, a bound, ...), where its text starts (its opening parenthesis if it
+    has one) and how deeply it nests operators (a name or a number counts 1)."""
+
+    __slots__ = ("value", "line", "column", "depth")
+
+    def __init__(self, value, line: int, column: int, depth: int = 0) -> None:
+        self.value, self.line, self.column, self.depth = value, line, column, depth
+
+
+# What a rule gets in place of an operand of the wrong kind, once the error is noted.
+_NOT_A_FORMULA = ast.Compare(ast.Const(0.0), ast.Comparator.GT, ast.Const(0.0))
+_NOT_AN_EXPRESSION = ast.Const(0.0)
+
+
+@v_args(inline=True)
 class _ToAst(Transformer):
-    """Lark tree -> (includes, definitions, final formula or None); checks operand kinds."""
+    """Builds the syntax tree while Lark parses: each method gets its rule's tokens and the
+    `_Part`s of its sub-rules, checks operand kinds and the nesting limit, and returns a `_Part`.
+    `start` returns (includes, definitions, final formula or None).
 
-    def __init__(self, source: str) -> None:
-        super().__init__()
-        self.source = source
+    Errors are noted, not raised, and parsing goes on, so that the errors come in the order of
+    parsing the whole text first: a syntax error anywhere, else the first error here (rules
+    are reduced in the order a transformer visits the tree), and the nesting limit last, after
+    the names are checked.
+    """
 
-    def start(self, meta, *items):
-        includes = [item for item in items if isinstance(item, tuple)]
-        definitions = [item for item in items if isinstance(item, ast.Definition)]
-        formulas = [item for item in items if not isinstance(item, (tuple, ast.Definition))]
-        formula = self._formula(formulas[0], meta) if formulas else None
+    # Set by `_parse_text` for each text:
+    source = "<string>"
+    error: StlSyntaxError | None = None  # the first error noted
+    too_deep: tuple[int, int] | None = None  # (line, column) of the first operator past MAX_DEPTH
+    uses_names = False  # whether a name is used as a formula
+
+    def reset(self, source: str) -> None:
+        self.source, self.error, self.too_deep, self.uses_names = source, None, None, False
+
+    def start(self, *items: _Part):
+        includes = [item.value for item in items if isinstance(item.value, tuple)]
+        definitions = [item.value for item in items if isinstance(item.value, ast.Definition)]
+        formulas = [item for item in items if not isinstance(item.value, (tuple, ast.Definition))]
+        formula = self._formula(formulas[0], items[0]) if formulas else None
         return includes, definitions, formula
 
-    def include(self, meta, path: Token):
-        return python_ast.literal_eval(str(path)), meta.line
+    def include(self, keyword: Token, path: Token):
+        return _Part((python_ast.literal_eval(str(path)), keyword.line), keyword.line, keyword.column)
 
-    def definition(self, meta, name: Token, body):
-        return ast.Definition(str(name), self._formula(body, meta), meta.line, self.source)
+    def definition(self, name: Token, _assign: Token, body: _Part):
+        definition = ast.Definition(str(name), self._formula(body, name), name.line, self.source)
+        return _Part(definition, name.line, name.column, body.depth)
 
-    def implies(self, meta, left, right):
-        return ast.Implies(self._formula(left, meta), self._formula(right, meta))
+    def implies(self, left: _Part, arrow: Token, right: _Part):
+        return self._node(ast.Implies(self._formula(left, left), self._formula(right, left)), left, arrow, (left, right))
 
-    def disjunction(self, meta, *operands):
-        return ast.Or(tuple(self._formula(operand, meta) for operand in operands))
+    def disjunction(self, *items):
+        operands = items[::2]
+        return self._node(ast.Or(tuple(self._formula(operand, items[0]) for operand in operands)), items[0], items[1], operands)
 
-    def conjunction(self, meta, *operands):
-        return ast.And(tuple(self._formula(operand, meta) for operand in operands))
+    def conjunction(self, *items):
+        operands = items[::2]
+        return self._node(ast.And(tuple(self._formula(operand, items[0]) for operand in operands)), items[0], items[1], operands)
 
-    def until(self, meta, left, *rest):
-        interval, right = (rest[0], rest[1]) if len(rest) == 2 else (None, rest[0])
-        return ast.Until(self._formula(left, meta), self._formula(right, meta), interval)
+    def until(self, left: _Part, keyword: Token, *rest: _Part):
+        interval, right = (rest[0].value, rest[1]) if len(rest) == 2 else (None, rest[0])
+        return self._node(ast.Until(self._formula(left, left), self._formula(right, left), interval), left, keyword, (left, right))
 
-    def negation(self, meta, child):
-        return ast.Not(self._formula(child, meta))
+    def negation(self, keyword: Token, child: _Part):
+        return self._node(ast.Not(self._formula(child, keyword)), keyword, keyword, (child,))
 
-    def always(self, meta, *args):
-        return ast.Always(self._formula(args[-1], meta), args[0] if len(args) == 2 else None)
+    def always(self, keyword: Token, *rest: _Part):
+        interval = rest[0].value if len(rest) == 2 else None
+        return self._node(ast.Always(self._formula(rest[-1], keyword), interval), keyword, keyword, (rest[-1],))
 
-    def eventually(self, meta, *args):
-        return ast.Eventually(self._formula(args[-1], meta), args[0] if len(args) == 2 else None)
+    def eventually(self, keyword: Token, *rest: _Part):
+        interval = rest[0].value if len(rest) == 2 else None
+        return self._node(ast.Eventually(self._formula(rest[-1], keyword), interval), keyword, keyword, (rest[-1],))
 
-    def compare(self, meta, left, comparator: Token, right):
-        return ast.Compare(self._expr(left, meta), ast.Comparator(str(comparator)), self._expr(right, meta))
+    def compare(self, left: _Part, comparator: Token, right: _Part):
+        node = ast.Compare(self._expr(left, left), ast.Comparator(str(comparator)), self._expr(right, left))
+        return self._node(node, left, comparator, (left, right))
 
-    def region(self, meta, expr, lo, hi):
-        if lo[0] > hi[0]:
-            raise StlSyntaxError(f"empty range [{lo[0]:g}, {hi[0]:g}]: the lower end is above the upper", self.source, lo[1], lo[2])
-        return ast.InRange(self._expr(expr, meta), lo[0], hi[0])
+    def region(self, expr: _Part, keyword: Token, _open, lo: _Part, _comma, hi: _Part, _close):
+        if lo.value > hi.value:
+            self._note(f"empty range [{lo.value:g}, {hi.value:g}]: the lower end is above the upper", lo)
+        return self._node(ast.InRange(self._expr(expr, expr), lo.value, hi.value), expr, keyword, (expr,))
 
-    def arith(self, meta, left, op: Token, right):
-        return ast.Arith(ast.ArithOp(str(op)), self._expr(left, meta), self._expr(right, meta))
+    def arith(self, left: _Part, op: Token, right: _Part):
+        return self._node(ast.Arith(ast.ArithOp(str(op)), self._expr(left, left), self._expr(right, left)), left, op, (left, right))
 
-    def minus(self, meta, _sign, operand):
-        operand = self._expr(operand, meta)
-        return ast.Const(-operand.value) if isinstance(operand, ast.Const) else ast.Minus(operand)
+    def minus(self, sign: Token, operand: _Part):
+        value = self._expr(operand, sign)
+        if isinstance(value, ast.Const):
+            return _Part(ast.Const(-value.value), sign.line, sign.column, operand.depth)
+        return self._node(ast.Minus(value), sign, sign, (operand,))
 
-    def absolute(self, meta, operand):
-        return ast.Abs(self._expr(operand, meta))
+    def absolute(self, keyword: Token, _open, operand: _Part, _close):
+        return self._node(ast.Abs(self._expr(operand, keyword)), keyword, keyword, (operand,))
 
-    def number(self, meta, token: Token):
-        return ast.Const(self._finite(token))
+    def group(self, bracket: Token, inner: _Part, _close):
+        return _Part(inner.value, bracket.line, bracket.column, inner.depth)
 
-    def name(self, meta, token: Token):
-        return _Name(str(token), token.line, token.column, self.source)
+    def number(self, token: Token):
+        return _Part(ast.Const(self._finite(token)), token.line, token.column, 1)
 
-    def interval(self, meta, lo, hi):
-        for value, line, column in (lo, hi):
-            if value < 0:
-                raise StlSyntaxError(f"interval bounds must be non-negative (got {value:g})", self.source, line, column)
-        if lo[0] > hi[0]:
-            raise StlSyntaxError(f"empty interval [{lo[0]:g}, {hi[0]:g}]: the lower bound is above the upper", self.source, lo[1], lo[2])
-        return ast.Interval(lo[0], hi[0])
+    def name(self, token: Token):
+        return _Part(_Name(str(token), token.line, token.column, self.source), token.line, token.column, 1)
 
-    def bound(self, meta, *tokens: Token):
+    def interval(self, bracket: Token, lo: _Part, _comma, hi: _Part, _close):
+        for bound in (lo, hi):
+            if bound.value < 0:
+                self._note(f"interval bounds must be non-negative (got {bound.value:g})", bound)
+        if lo.value > hi.value:
+            self._note(f"empty interval [{lo.value:g}, {hi.value:g}]: the lower bound is above the upper", lo)
+        return _Part(ast.Interval(lo.value, hi.value), bracket.line, bracket.column)
+
+    def bound(self, *tokens: Token):
         value = self._finite(tokens[-1]) * (-1.0 if str(tokens[0]) == "-" else 1.0)
-        return value, meta.line, meta.column
+        return _Part(value, tokens[0].line, tokens[0].column)
+
+    def _node(self, node: ast.Node, first: _Part | Token, operator: Token, operands) -> _Part:
+        """`node` as a `_Part` starting where `first` starts; the first operator to nest past
+        `MAX_DEPTH` is noted."""
+        depth = 1 + max(operand.depth for operand in operands)
+        if depth > MAX_DEPTH and self.too_deep is None:
+            self.too_deep = (operator.line, operator.column)
+        return _Part(node, first.line, first.column, depth)
+
+    def _note(self, message: str, at: _Part | Token) -> None:
+        if self.error is None:
+            self.error = StlSyntaxError(message, self.source, at.line, at.column)
 
     def _finite(self, token: Token) -> float:
         value = float(token)
         if not math.isfinite(value):
-            raise StlSyntaxError(f"the number {token} is too large (at most about 1.8e308)", self.source, token.line, token.column)
+            self._note(f"the number {token} is too large (at most about 1.8e308)", token)
+            return 0.0
         return value
 
-    def _formula(self, node, meta) -> ast.Formula:
-        if isinstance(node, _Name):
-            return ast.Ref(node.name, node.line, node.column, node.source)
-        if isinstance(node, ast.Formula):
-            return node
-        raise StlSyntaxError(
-            "expected a formula but found an arithmetic expression (missing a comparison such as > 0?)",
-            self.source,
-            meta.line,
-            meta.column,
-        )
+    def _formula(self, part: _Part, at: _Part | Token) -> ast.Formula:
+        """The formula `part` holds; `at` (where the rule starts) places the error otherwise."""
+        value = part.value
+        if isinstance(value, _Name):
+            self.uses_names = True
+            return ast.Ref(value.name, value.line, value.column, value.source)
+        if isinstance(value, ast.Formula):
+            return value
+        self._note("expected a formula but found an arithmetic expression (missing a comparison such as > 0?)", at)
+        return _NOT_A_FORMULA
 
-    def _expr(self, node, meta) -> ast.Expr:
-        if isinstance(node, _Name):
-            return ast.Signal(node.name, node.line, node.column, node.source)
-        if isinstance(node, ast.Expr):
-            return node
-        raise StlSyntaxError("expected an arithmetic expression but found a formula", self.source, meta.line, meta.column)
+    def _expr(self, part: _Part, at: _Part | Token) -> ast.Expr:
+        value = part.value
+        if isinstance(value, _Name):
+            return ast.Signal(value.name, value.line, value.column, value.source)
+        if isinstance(value, ast.Expr):
+            return value
+        self._note("expected an arithmetic expression but found a formula", at)
+        return _NOT_AN_EXPRESSION

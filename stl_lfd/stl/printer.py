@@ -2,6 +2,9 @@
 
 Parentheses appear only where precedence or the n-ary grouping needs them: `(a & b) & c`
 stays a nested conjunction, `a & b & c` one chain.
+
+Printing goes children first without recursion (`ast.post_order`), so any tree prints, and in
+time linear in the length of its text.
 """
 
 from __future__ import annotations
@@ -21,8 +24,10 @@ def format_spec(spec: ast.Spec) -> str:
 
 
 def format_formula(node: ast.Node) -> str:
-    text, _ = _format(node)
-    return text
+    printed: dict[int, tuple[str, int]] = {}  # id -> (text, precedence level of its operator)
+    for each in ast.post_order(node):
+        printed[id(each)] = _format(each, [printed[id(child)] for child in each.children()])
+    return printed[id(node)][0]
 
 
 def _number(value: float) -> str:
@@ -35,42 +40,43 @@ def _interval(interval: ast.Interval | None) -> str:
     return "" if interval is None else f"[{_number(interval.lo)}, {_number(interval.hi)}]"
 
 
-def _format(node: ast.Node) -> tuple[str, int]:
-    """(text, precedence level of the text's outermost operator)."""
+def _format(node: ast.Node, children: list[tuple[str, int]]) -> tuple[str, int]:
+    """(text, precedence level of the text's outermost operator) of `node`, given those of its
+    children."""
     match node:
         case ast.Const(value=value):
             return _number(value), (_MINUS if value < 0 or str(value).startswith("-") else _ATOM)
         case ast.Signal(name=name) | ast.Ref(name=name):
             return name, _ATOM
-        case ast.Abs(operand=operand):
-            return f"abs({format_formula(operand)})", _ATOM
-        case ast.Minus(operand=operand):
-            return f"-{_wrap(operand, _MINUS)}", _MINUS
-        case ast.Arith(op=op, left=left, right=right):
+        case ast.Abs():
+            return f"abs({children[0][0]})", _ATOM
+        case ast.Minus():
+            return f"-{_wrap(children[0], _MINUS)}", _MINUS
+        case ast.Arith(op=op):
             level = _SUM if op in (ast.ArithOp.ADD, ast.ArithOp.SUB) else _PRODUCT
-            return f"{_wrap(left, level)} {op.value} {_wrap(right, level + 1)}", level
-        case ast.Compare(left=left, op=op, right=right):
-            return f"{_wrap(left, _SUM)} {op.value} {_wrap(right, _SUM)}", _COMPARISON
-        case ast.InRange(expr=expr, lo=lo, hi=hi):
-            return f"{_wrap(expr, _SUM)} in [{_number(lo)}, {_number(hi)}]", _COMPARISON
-        case ast.Not(child=child):
-            return f"!{_wrap(child, _UNARY)}", _UNARY
-        case ast.Always(child=child, interval=interval):
-            return f"G{_interval(interval)} {_wrap(child, _UNARY)}", _UNARY
-        case ast.Eventually(child=child, interval=interval):
-            return f"F{_interval(interval)} {_wrap(child, _UNARY)}", _UNARY
-        case ast.Until(left=left, right=right, interval=interval):
-            return f"{_wrap(left, _UNARY)} U{_interval(interval)} {_wrap(right, _UNTIL)}", _UNTIL
-        case ast.And(operands=operands):
-            return " & ".join(_wrap(operand, _AND + 1) for operand in operands), _AND
-        case ast.Or(operands=operands):
-            return " | ".join(_wrap(operand, _OR + 1) for operand in operands), _OR
-        case ast.Implies(left=left, right=right):
-            return f"{_wrap(left, _OR)} -> {_wrap(right, _IMPLIES)}", _IMPLIES
+            return f"{_wrap(children[0], level)} {op.value} {_wrap(children[1], level + 1)}", level
+        case ast.Compare(op=op):
+            return f"{_wrap(children[0], _SUM)} {op.value} {_wrap(children[1], _SUM)}", _COMPARISON
+        case ast.InRange(lo=lo, hi=hi):
+            return f"{_wrap(children[0], _SUM)} in [{_number(lo)}, {_number(hi)}]", _COMPARISON
+        case ast.Not():
+            return f"!{_wrap(children[0], _UNARY)}", _UNARY
+        case ast.Always(interval=interval):
+            return f"G{_interval(interval)} {_wrap(children[0], _UNARY)}", _UNARY
+        case ast.Eventually(interval=interval):
+            return f"F{_interval(interval)} {_wrap(children[0], _UNARY)}", _UNARY
+        case ast.Until(interval=interval):
+            return f"{_wrap(children[0], _UNARY)} U{_interval(interval)} {_wrap(children[1], _UNTIL)}", _UNTIL
+        case ast.And():
+            return " & ".join([_wrap(child, _AND + 1) for child in children]), _AND
+        case ast.Or():
+            return " | ".join([_wrap(child, _OR + 1) for child in children]), _OR
+        case ast.Implies():
+            return f"{_wrap(children[0], _OR)} -> {_wrap(children[1], _IMPLIES)}", _IMPLIES
     raise TypeError(f"cannot print node of type {type(node).__name__}")
 
 
-def _wrap(node: ast.Node, minimum_level: int) -> str:
-    """`node` as text, parenthesised if its operator binds looser than `minimum_level`."""
-    text, level = _format(node)
+def _wrap(printed: tuple[str, int], minimum_level: int) -> str:
+    """A printed node, parenthesised if its operator binds looser than `minimum_level`."""
+    text, level = printed
     return text if level >= minimum_level else f"({text})"

@@ -9,15 +9,20 @@ Every node compiles to an evaluator `(trace, start, stop) -> B x (stop - start)`
 the node's robustness only at the samples [start, stop); a temporal operator asks its operands
 for just the samples its windows reach. The robustness of a trace is the value at its first
 sample, so most of a long trace is never evaluated by formulas with bounded windows.
+
+Compiling folds the formula without recursion, once per distinct node: a definition used in
+several places is one shared node (see `resolve`), compiled once and, within one evaluation,
+computed once per range of samples asked of it. Evaluating recurses, with at most two stack
+frames a level of nesting, which the parser keeps within `MAX_DEPTH` (a formula built deeper in
+code is refused here).
 """
 
 from __future__ import annotations
 
-import functools
 import math
 import warnings
-from dataclasses import dataclass
-from typing import Callable, Literal, Mapping
+from dataclasses import dataclass, field
+from typing import Callable, Iterator, Literal, Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -32,7 +37,7 @@ from stl_lfd.stl._numerics import (
     window_min,
     window_reduce,
 )
-from stl_lfd.stl.parser import parse, resolve
+from stl_lfd.stl.parser import MAX_DEPTH, parse, resolve
 from stl_lfd.stl.printer import format_formula
 
 SemanticsName = Literal["classic", "new"]
@@ -80,6 +85,7 @@ class _Trace:
     signals: Mapping[str, np.ndarray]  # name -> B x T
     elapsed: np.ndarray  # T: times since the first sample
     batch: int
+    shared: dict[tuple[int, int, int], np.ndarray] = field(default_factory=dict)  # values of shared nodes
 
     @property
     def length(self) -> int:
@@ -103,15 +109,19 @@ class Robustness:
         self.formula = formula
         self.semantics = semantics
         self.source = source
-        self.signals = frozenset(node.name for node in formula.walk() if isinstance(node, ast.Signal))
-        self.horizon = horizon(formula)
+        with ast.collector_paused():
+            compiled = _compile(formula, semantics)
+        if compiled.depth > MAX_DEPTH:
+            raise SpecError(f"the formula nests more than {MAX_DEPTH} levels deep; simplify it", source)
+        self.signals = compiled.signals
+        self.horizon = compiled.horizon
         # The bounded `G`/`F` and their window lengths (s), for the cost warning of `_prepare`.
         self._windows = [
             (node, node.interval.hi - node.interval.lo)
-            for node in formula.walk()
+            for node in (_distinct(formula) if semantics.name == "new" else ())
             if isinstance(node, (ast.Always, ast.Eventually)) and node.interval is not None
         ]
-        self._evaluate = _compile(formula, semantics)
+        self._evaluate = compiled.evaluate
 
     def __call__(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> float | np.ndarray:
         """Robustness at the first sample.
@@ -144,7 +154,7 @@ class Robustness:
         arrays = {name: np.asarray(signals[name], dtype=float) for name in self.signals if name in signals}
         missing = sorted(self.signals - arrays.keys())
         if missing:
-            node = next(n for n in self.formula.walk() if isinstance(n, ast.Signal) and n.name == missing[0])
+            node = next(n for n in _distinct(self.formula) if isinstance(n, ast.Signal) and n.name == missing[0])
             available = ", ".join(sorted(signals)) or "none"
             raise StlNameError(f"unknown signal '{node.name}' (the trace has: {available})", node.source, node.line, node.column)
         _check_times(times)
@@ -173,7 +183,7 @@ class Robustness:
             node, width = max(windows, key=lambda item: item[1])
             warnings.warn(
                 CostWarning(
-                    f"{self.source}: the new robustness of `{format_formula(node)}` on {times.size} samples takes about "
+                    f"{self.source}: the new robustness of `{_shown(node)}` on {times.size} samples takes about "
                     f"{operations:.1e} operations (windows of up to {width:.0f} samples at every sample), "
                     f"minutes; the classic semantics is linear in the samples"
                 ),
@@ -194,9 +204,12 @@ def compile_spec(spec: str | ast.Spec | ast.Formula, semantics: SemanticsName | 
 
 def horizon(node: ast.Node) -> float:
     """Seconds beyond the first sample that the bounded windows of `node` reach."""
-    children = max((horizon(child) for child in node.children()), default=0.0)
-    interval = getattr(node, "interval", None)
-    return children + (interval.hi if interval is not None else 0.0)
+    reach: dict[int, float] = {}
+    for each in ast.post_order(node):
+        interval = getattr(each, "interval", None)
+        below = max([reach[id(child)] for child in each.children()], default=0.0)
+        reach[id(each)] = below + interval.hi if interval is not None else below
+    return reach[id(node)]
 
 
 # --- Helper functions -----------------------------------------------------------------------
@@ -231,7 +244,33 @@ def _window(interval: ast.Interval | None, trace: _Trace, start: int) -> tuple[i
     return lo, min(hi, last)
 
 
-_COMPILERS: dict[type, Callable[[ast.Node, Semantics], Evaluator]] = {}
+def _distinct(formula: ast.Node) -> Iterator[ast.Node]:
+    """Each node of `formula` once, depth first in the order of the text, however often it is
+    shared."""
+    seen: set[int] = set()
+    stack = [formula]
+    while stack:
+        node = stack.pop()
+        if id(node) not in seen:
+            seen.add(id(node))
+            yield node
+            stack.extend(reversed(node.children()))
+
+
+def _shown(node: ast.Node, most: int = 500) -> str:
+    """`node` as text, or its operator alone when the text would spell out more than `most`
+    nodes (shared definitions can make a small graph print as a huge formula)."""
+    sizes: dict[int, int] = {}
+    for each in ast.post_order(node):
+        sizes[id(each)] = min(most + 1, 1 + sum(sizes[id(child)] for child in each.children()))
+    if sizes[id(node)] <= most:
+        return format_formula(node)
+    interval = getattr(node, "interval", None)
+    window = "" if interval is None else f"[{interval.lo:g}, {interval.hi:g}]"
+    return f"{'G' if isinstance(node, ast.Always) else 'F'}{window} (...)"
+
+
+_COMPILERS: dict[type, Callable[[ast.Node, list[Evaluator], Semantics], Evaluator]] = {}
 
 
 def _handles(node_type: type):
@@ -242,33 +281,96 @@ def _handles(node_type: type):
     return register
 
 
-def _compile(node: ast.Node, semantics: Semantics) -> Evaluator:
-    try:
-        compiler = _COMPILERS[type(node)]
-    except KeyError:
-        raise TypeError(f"cannot compile node of type {type(node).__name__}") from None
-    return compiler(node, semantics)
+@dataclass(frozen=True)
+class _Compiled:
+    """What `_compile` finds in one pass over a formula."""
+
+    evaluate: Evaluator
+    depth: int  # levels of nesting
+    horizon: float  # seconds
+    signals: frozenset[str]
+
+
+def _compile(formula: ast.Formula, semantics: Semantics) -> _Compiled:
+    """The evaluator of `formula`, built children first without recursion, each distinct node
+    once (a node with several parents is wrapped to be computed once per range of samples),
+    with the formula's depth, horizon and signals found on the way."""
+    shared: set[int] = set()
+    evaluators: dict[int, Evaluator] = {}
+    extents: dict[int, tuple[int, float]] = {}  # id -> (depth, horizon)
+    signals: set[str] = set()
+    for node in ast.post_order(formula, _parts, shared):
+        try:
+            compiler = _COMPILERS[type(node)]
+        except KeyError:
+            raise TypeError(f"cannot compile node of type {type(node).__name__}") from None
+        parts = _parts(node)
+        evaluator = compiler(node, [evaluators[id(part)] for part in parts], semantics)
+        evaluators[id(node)] = _computed_once(evaluator) if id(node) in shared else evaluator
+        if parts:
+            depth, reach = max(extents[id(part)][0] for part in parts), max(extents[id(part)][1] for part in parts)
+            interval = getattr(node, "interval", None)
+            extents[id(node)] = (depth + 1, reach + interval.hi if interval is not None else reach)
+        elif type(node) is ast.Compare:  # a signal against a number
+            signals.add(_signal_versus_number(node)[0])  # type: ignore[index]
+            extents[id(node)] = (2, 0.0)
+        else:
+            if type(node) is ast.Signal:
+                signals.add(node.name)  # type: ignore[attr-defined]
+            extents[id(node)] = (1, 0.0)
+    depth, reach = extents[id(formula)]
+    return _Compiled(evaluators[id(formula)], depth, reach, frozenset(signals))
+
+
+def _parts(node: ast.Node) -> tuple[ast.Node, ...]:
+    """The children the compiler needs: none for a comparison of a signal with a number, which
+    compiles to one function (the commonest predicate, thousands of them in a large spec)."""
+    return () if _signal_versus_number(node) is not None else node.children()
+
+
+def _signal_versus_number(node: ast.Node) -> tuple[str, float, bool] | None:
+    """(signal, number, signal on the left) of `x > 1` or `1 < x`, else None."""
+    if type(node) is ast.Compare:
+        left, right = node.left, node.right
+        if type(left) is ast.Signal and type(right) is ast.Const:
+            return left.name, right.value, True
+        if type(left) is ast.Const and type(right) is ast.Signal:
+            return right.name, left.value, False
+    return None
+
+
+def _computed_once(evaluate: Evaluator) -> Evaluator:
+    """`evaluate` for a node with several parents: each range of samples is computed once per
+    trace. (No evaluator writes into the arrays its operands return.)"""
+
+    def shared(trace: _Trace, start: int, stop: int) -> np.ndarray:
+        key = (id(shared), start, stop)
+        if key not in trace.shared:
+            trace.shared[key] = evaluate(trace, start, stop)
+        return trace.shared[key]
+
+    return shared
 
 
 @_handles(ast.Const)
-def _const(node: ast.Const, semantics: Semantics) -> Evaluator:
+def _const(node: ast.Const, children: list[Evaluator], semantics: Semantics) -> Evaluator:
     return lambda trace, start, stop: np.full((trace.batch, stop - start), node.value)
 
 
 @_handles(ast.Signal)
-def _signal(node: ast.Signal, semantics: Semantics) -> Evaluator:
+def _signal(node: ast.Signal, children: list[Evaluator], semantics: Semantics) -> Evaluator:
     return lambda trace, start, stop: trace.signals[node.name][:, start:stop]
 
 
 @_handles(ast.Minus)
-def _minus(node: ast.Minus, semantics: Semantics) -> Evaluator:
-    operand = _compile(node.operand, semantics)
+def _minus(node: ast.Minus, children: list[Evaluator], semantics: Semantics) -> Evaluator:
+    (operand,) = children
     return lambda trace, start, stop: -operand(trace, start, stop)
 
 
 @_handles(ast.Abs)
-def _abs(node: ast.Abs, semantics: Semantics) -> Evaluator:
-    operand = _compile(node.operand, semantics)
+def _abs(node: ast.Abs, children: list[Evaluator], semantics: Semantics) -> Evaluator:
+    (operand,) = children
     return lambda trace, start, stop: np.abs(operand(trace, start, stop))
 
 
@@ -281,8 +383,8 @@ _ARITHMETIC = {
 
 
 @_handles(ast.Arith)
-def _arith(node: ast.Arith, semantics: Semantics) -> Evaluator:
-    left, right, operation = _compile(node.left, semantics), _compile(node.right, semantics), _ARITHMETIC[node.op]
+def _arith(node: ast.Arith, children: list[Evaluator], semantics: Semantics) -> Evaluator:
+    (left, right), operation = children, _ARITHMETIC[node.op]
 
     def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -292,17 +394,21 @@ def _arith(node: ast.Arith, semantics: Semantics) -> Evaluator:
 
 
 @_handles(ast.Compare)
-def _compare(node: ast.Compare, semantics: Semantics) -> Evaluator:
+def _compare(node: ast.Compare, children: list[Evaluator], semantics: Semantics) -> Evaluator:
     greater = node.op in (ast.Comparator.GT, ast.Comparator.GE)
-    left, right = _compile(node.left, semantics), _compile(node.right, semantics)
-    if not greater:
-        left, right = right, left
+    simple = _signal_versus_number(node)
+    if simple is not None:  # `signal - number` or `number - signal`, as the general case computes it
+        name, number, signal_left = simple
+        if greater == signal_left:
+            return _finite_predicate(node, lambda trace, start, stop: trace.signals[name][:, start:stop] - number)
+        return _finite_predicate(node, lambda trace, start, stop: number - trace.signals[name][:, start:stop])
+    left, right = children if greater else reversed(children)
     return _finite_predicate(node, lambda trace, start, stop: left(trace, start, stop) - right(trace, start, stop))
 
 
 @_handles(ast.InRange)
-def _in_range(node: ast.InRange, semantics: Semantics) -> Evaluator:
-    expr = _compile(node.expr, semantics)
+def _in_range(node: ast.InRange, children: list[Evaluator], semantics: Semantics) -> Evaluator:
+    (expr,) = children
     half_width, centre = (node.hi - node.lo) / 2, (node.hi + node.lo) / 2
     return _finite_predicate(node, lambda trace, start, stop: half_width - np.abs(expr(trace, start, stop) - centre))
 
@@ -326,47 +432,46 @@ def _finite_predicate(node: ast.Formula, evaluate: Evaluator) -> Evaluator:
 
 
 @_handles(ast.Not)
-def _not(node: ast.Not, semantics: Semantics) -> Evaluator:
-    child = _compile(node.child, semantics)
+def _not(node: ast.Not, children: list[Evaluator], semantics: Semantics) -> Evaluator:
+    (child,) = children
     return lambda trace, start, stop: -child(trace, start, stop)
 
 
-def _nary(operands: list[Evaluator], semantics: Semantics, sign: float) -> Evaluator:
-    """Conjunction (sign +1) or disjunction (sign -1) of the operands.
+def _nary(values: list[np.ndarray], semantics: Semantics, sign: float) -> np.ndarray:
+    """Conjunction (sign +1) or disjunction (sign -1) of the operands' values.
 
     Classic chains reduce pairwise (no stacked copy); the new conjunction needs all operands
     at once, and its disjunction is `!(!a & !b & ...)`.
     """
     if semantics.name == "classic":
         pairwise = np.minimum if sign > 0 else np.maximum
-
-        def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
-            return functools.reduce(pairwise, (operand(trace, start, stop) for operand in operands))
-
-        return evaluate
-
-    def evaluate_new(trace: _Trace, start: int, stop: int) -> np.ndarray:
-        stacked = np.stack([sign * operand(trace, start, stop) for operand in operands], axis=-1)
-        return sign * new_conjunction(stacked, semantics.nu)
-
-    return evaluate_new
+        result = values[0]
+        for value in values[1:]:
+            result = pairwise(result, value)
+        return result
+    stacked = np.stack(values, axis=-1)
+    return sign * new_conjunction(sign * stacked, semantics.nu)
 
 
 @_handles(ast.And)
-def _and(node: ast.And, semantics: Semantics) -> Evaluator:
-    operands = [_compile(operand, semantics) for operand in node.operands]
-    return _nary(operands, semantics, 1.0)
-
-
 @_handles(ast.Or)
-def _or(node: ast.Or, semantics: Semantics) -> Evaluator:
-    operands = [_compile(operand, semantics) for operand in node.operands]
-    return _nary(operands, semantics, -1.0)
+def _and_or(node: ast.And | ast.Or, children: list[Evaluator], semantics: Semantics) -> Evaluator:
+    sign = 1.0 if isinstance(node, ast.And) else -1.0
+
+    def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
+        values = []
+        for operand in children:  # a loop, not a comprehension: one stack frame per level
+            values.append(operand(trace, start, stop))
+        return _nary(values, semantics, sign)
+
+    return evaluate
 
 
 @_handles(ast.Implies)
-def _implies(node: ast.Implies, semantics: Semantics) -> Evaluator:
-    return _compile(ast.Or((ast.Not(node.left), node.right)), semantics)
+def _implies(node: ast.Implies, children: list[Evaluator], semantics: Semantics) -> Evaluator:
+    """`!a | b`."""
+    left, right = children
+    return lambda trace, start, stop: _nary([-left(trace, start, stop), right(trace, start, stop)], semantics, -1.0)
 
 
 def _always_evaluator(child: Evaluator, interval: ast.Interval | None, semantics: Semantics, sign: float) -> Evaluator:
@@ -390,18 +495,18 @@ def _always_evaluator(child: Evaluator, interval: ast.Interval | None, semantics
 
 
 @_handles(ast.Always)
-def _always(node: ast.Always, semantics: Semantics) -> Evaluator:
-    return _always_evaluator(_compile(node.child, semantics), node.interval, semantics, 1.0)
+def _always(node: ast.Always, children: list[Evaluator], semantics: Semantics) -> Evaluator:
+    return _always_evaluator(children[0], node.interval, semantics, 1.0)
 
 
 @_handles(ast.Eventually)
-def _eventually(node: ast.Eventually, semantics: Semantics) -> Evaluator:
-    return _always_evaluator(_compile(node.child, semantics), node.interval, semantics, -1.0)
+def _eventually(node: ast.Eventually, children: list[Evaluator], semantics: Semantics) -> Evaluator:
+    return _always_evaluator(children[0], node.interval, semantics, -1.0)
 
 
 @_handles(ast.Until)
-def _until(node: ast.Until, semantics: Semantics) -> Evaluator:
-    left, right = _compile(node.left, semantics), _compile(node.right, semantics)
+def _until(node: ast.Until, children: list[Evaluator], semantics: Semantics) -> Evaluator:
+    left, right = children
 
     def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
         lo, hi = _window(node.interval, trace, start)
