@@ -113,6 +113,16 @@ CASES = [
     Case("spec-missing", ["robustness", "{case}/nope.stl", "{csv}"], 3, "no such specification file"),
     Case("spec-is-folder", ["robustness", "{case}", "{csv}"], 3, "is a folder, not a specification file"),
     spec_case("spec-empty", "", 3, "the specification is empty"),
+    spec_case(
+        "spec-nested-3000", "phi := " + "G[0, 1] " * 3000 + "s > 0\n", 3, "the specification nests more than 200 levels deep (counting through its definitions)"
+    ),
+    spec_case("spec-chained-implications", "phi := " + " -> ".join(["s > 0"] * 5000) + "\n", 3, "nests more than 200 levels deep"),
+    spec_case(
+        "spec-deep-definitions",
+        "".join(f"d{i} := F d{i - 1}\n" if i else "d0 := s > 0\n" for i in range(300)) + "phi := d299\n",
+        3,
+        "nests more than 200 levels deep",
+    ),
     spec_case("spec-only-comment", "# nothing\n", 3, "the specification is empty"),
     spec_case("spec-unbalanced", "phi := F (s > 0\n", 3, "s.stl:1:16: unexpected end of input"),
     spec_case("spec-bad-token", "phi := F s >> 0\n", 3, "s.stl:1"),
