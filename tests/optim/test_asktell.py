@@ -189,7 +189,7 @@ def test_the_commands_print_paths_and_robustness_for_scripts(tmp_path, learned_m
     done = runner.invoke(app, ["ask", str(run)])
     assert done.exit_code == 0 and done.stdout == "" and "the run has all its trials" in done.stderr
     both = runner.invoke(app, ["tell", str(run)])
-    assert both.exit_code == 5 and "give the signals CSV of the pending trial, or --failed" in both.stderr
+    assert both.exit_code == 2 and "give the signals CSV of the pending trial, or --failed" in both.stderr
 
 
 @pytest.mark.slow
