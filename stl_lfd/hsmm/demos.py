@@ -22,7 +22,7 @@ def load_demos(folder: str | Path) -> list[SignalTable]:
     """Every `*.csv` of `folder`, sorted by name (or `folder` itself, a single demonstration's
     CSV file); each must have `t,x,y,z` and the same columns."""
     folder = Path(folder)
-    if folder.is_file() and folder.suffix == ".csv":
+    if folder.is_file() and folder.suffix.lower() == ".csv":
         paths = [folder]
     elif not folder.is_dir():
         raise SignalError(f"{folder}: no such folder of demonstrations (or demonstration CSV file)")

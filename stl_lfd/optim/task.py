@@ -228,9 +228,11 @@ def _behaviour_scene(behaviour: Path) -> str:
 def _scene(base: Path, value: Any, path: Path) -> str:
     """A built-in scene's name, or a scene file's path (relative to the task file's folder)."""
     text = str(value)
-    if text.endswith((".yaml", ".yml")) or "/" in text:
-        return str(_existing(base, text, path, "scene"))
-    return text
+    if not (text.endswith((".yaml", ".yml")) or "/" in text):
+        return text
+    if not (base / text).exists() and Path(text).exists():  # resolved from the working directory by older versions
+        return str(Path(text).resolve())
+    return str(_existing(base, text, path, "scene").resolve())
 
 
 def _placements(data: dict[str, Any], path: Path, scene_name: str) -> tuple[dict[str, Pose], ...]:

@@ -110,8 +110,9 @@ def without_outliers(values: np.ndarray) -> np.ndarray:
     if len(values) < 4:
         return values
     lower, median, upper = np.percentile(values, [25, 50, 75], axis=0)
-    scale = np.maximum(np.maximum(upper - lower, np.abs(median)), 1e-9)
-    absurd = (values < lower - OUTLIER_SCALES * scale) | (values > upper + OUTLIER_SCALES * scale)
+    scale = np.maximum(upper - lower, np.abs(median))
+    # a column at exactly zero so far has no scale to judge by: its first move is news, not absurd
+    absurd = (scale > 1e-9) & ((values < lower - OUTLIER_SCALES * scale) | (values > upper + OUTLIER_SCALES * scale))
     if not absurd.any():
         return values
     worst = np.min(np.where(absurd, np.inf, values), axis=0)

@@ -19,6 +19,7 @@ it started; what it leaves running when it exits is stopped too, after every exe
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 import os
 import re
@@ -78,10 +79,10 @@ class Command:
                 raise ConfigError(f"the command {text!r} cannot be split into arguments ({error})") from None
         if not run or not run[0].strip():
             raise ConfigError("the command is empty")
-        unknown = sorted({name for argument in run for name in re.findall(r"(?<![$\\{]){([A-Za-z_][A-Za-z0-9_]*)}", argument)} - set(PLACEHOLDERS))
-        if unknown:
+        misspelt = _misspelt_placeholder(run)
+        if misspelt is not None:
             known = ", ".join("{" + name + "}" for name in PLACEHOLDERS)
-            raise ConfigError(f"the command has the placeholder {{{unknown[0]}}}, which stlopt does not know (its placeholders: {known})")
+            raise ConfigError(f"the command has {{{misspelt[0]}}}: did you mean {{{misspelt[1]}}}? (its placeholders: {known})")
         if not timeout > 0:
             raise ConfigError(f"the command's timeout must be positive (got {timeout})")
         return cls(run, float(timeout), shell, cwd)
@@ -105,6 +106,17 @@ class Command:
 
     def shown(self) -> str:
         return self.run[0] if self.shell else shlex.join(self.run)
+
+
+def _misspelt_placeholder(run: tuple[str, ...]) -> tuple[str, str] | None:
+    """`({name}, the placeholder it is close to)` for the first `{name}` in the command that is
+    a near-miss of a placeholder (`{signal}`); other braces (`awk '{print}'`) are the command's."""
+    for argument in run:
+        for name in re.findall(r"(?<![$\\{]){([A-Za-z_][A-Za-z0-9_]*)}", argument):
+            close = difflib.get_close_matches(name, PLACEHOLDERS, n=1, cutoff=0.75)
+            if name not in PLACEHOLDERS and close:
+                return name, close[0]
+    return None
 
 
 def exchange_folder(run_dir: Path, trial: int) -> Path:
@@ -222,15 +234,32 @@ def stop_process_group(process: subprocess.Popen) -> None:
     """SIGTERM to the process's group (the command and everything it started), SIGKILL to what
     is left after `STOP_GRACE` seconds."""
     _signal_group(process.pid, signal.SIGTERM)
+    deadline = time.monotonic() + STOP_GRACE
     try:
         process.wait(timeout=STOP_GRACE)
     except subprocess.TimeoutExpired:
         pass
-    deadline = time.monotonic() + STOP_GRACE
-    while _signal_group(process.pid, 0) and time.monotonic() < deadline:  # its children, ending
+    while _group_running(process.pid) and time.monotonic() < deadline:  # its children, ending
         time.sleep(0.02)
     _signal_group(process.pid, signal.SIGKILL)
     process.wait()
+
+
+def _group_running(group: int) -> bool:
+    """Whether a process of the group still runs; a zombie (ended, waiting for its parent or
+    init to reap it) does not."""
+    proc = Path("/proc")
+    if not proc.is_dir():
+        return _signal_group(group, 0)
+    for entry in proc.iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except (OSError, IndexError):
+                continue
+            if int(fields[2]) == group and fields[0] != "Z":
+                return True
+    return False
 
 
 def _signal_group(group: int, number: int) -> bool:

@@ -99,9 +99,11 @@ def _scene(text: str, path: Path) -> str:
     if not (text.endswith((".yaml", ".yml")) or "/" in text):
         return text
     resolved = Path(text) if Path(text).is_absolute() else path.parent / text
+    if not resolved.exists() and Path(text).exists():  # resolved from the working directory by older versions
+        resolved = Path(text)
     if not resolved.exists():
         raise ConfigError(f"{path}: 'scene' names {text}, which does not exist (paths are relative to the behaviour file)")
-    return str(resolved)
+    return str(resolved.resolve())
 
 
 def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:

@@ -86,3 +86,24 @@ def test_behaviour_tasks_take_parameters_per_skill(learned_model):
     task = load_task(CONFIGS / "phi3.yaml")
     assert set(task.parameters) == {"pick", "insert"} and task.scene == "pick_insert"
     assert task.parameters["pick"].transitions == "band" and task.parameters["insert"].means.components == (5, 6)
+
+
+def test_a_scene_file_is_relative_to_the_task_file_and_survives_the_run_record(tmp_path, monkeypatch):
+    import yaml
+
+    from stl_lfd.optim import load_task
+
+    (tmp_path / "scenes").mkdir()
+    (tmp_path / "scenes" / "s.yaml").write_text("description: a scene\nsafety: {workspace: {lower: [0.2, -0.6, 0.1], upper: [0.8, 0.6, 0.8]}, max_speed: 1}\n")
+    (tmp_path / "cfg").mkdir()
+    spec = Path(__file__).resolve().parents[2] / "specs" / "phi1.stl"
+    demos = Path(__file__).resolve().parents[2] / "demos" / "three_regions"
+    (tmp_path / "cfg" / "t.yaml").write_text(
+        f"spec: {spec}\ndemos: {demos}\nscene: ../scenes/s.yaml\nduration: 22\nparameters: {{means: {{components: [2]}}}}\n"
+    )
+    monkeypatch.chdir(tmp_path)
+    task = load_task(Path("cfg/t.yaml"))
+    assert Path(task.scene) == (tmp_path / "scenes" / "s.yaml").resolve()
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "task.yaml").write_text(yaml.safe_dump(task.to_yaml_dict()))  # as a run directory keeps it
+    assert load_task(Path("run/task.yaml")).scene == task.scene

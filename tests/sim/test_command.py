@@ -250,3 +250,12 @@ def test_what_a_command_leaves_running_is_stopped_after_every_execution(tmp_path
     script = "sleep 300 & echo $! > left.pid"
     run_command(Command.parse(script, shell=True, cwd=tmp_path), {}, tmp_path)
     assert not alive(int((tmp_path / "left.pid").read_text()))
+
+
+def test_a_misspelt_placeholder_is_named_and_other_braces_are_the_commands():
+    from stl_lfd.errors import ConfigError
+    from stl_lfd.sim.command import Command
+
+    with pytest.raises(ConfigError, match=r"the command has \{signal\}: did you mean \{signals\}\?"):
+        Command.parse("executor {reference} {signal}")
+    assert Command.parse("awk '{print}' {reference}").run == ("awk", "{print}", "{reference}")

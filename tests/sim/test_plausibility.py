@@ -25,7 +25,8 @@ def recording(times=TIMES, **columns) -> SignalTable:
 
 def test_a_plausible_recording_passes():
     check_recorded(recording(), REFERENCE, SCENE, 10)
-    check_recorded(recording(times=np.arange(0, 1101) / 50), REFERENCE, SCENE, 10)  # recorded five times finer
+    check_recorded(recording(times=np.arange(0, 22001) / 1000), REFERENCE, SCENE, 10)  # a 1 kHz controller's log
+    check_recorded(recording(times=np.arange(0, 241) / 10), REFERENCE, SCENE, 10)  # two seconds of coming to rest
 
 
 @pytest.mark.parametrize(
@@ -36,6 +37,7 @@ def test_a_plausible_recording_passes():
         (recording(y=np.full(221, -0.9)), r"rec.csv:2: the hand at \(x=0.5, y=-0.9, z=0.4\) is more than 0.25 m outside"),
         (recording(times=TIMES * 1000), r"rec.csv: the signals cover 0 to 22000 s, but the rollout lasts 0 to 22 s \(times must be in seconds\)"),
         (recording(times=TIMES[:100]), r"rec.csv: the signals cover 0 to 9.9 s, but the rollout lasts 0 to 22 s$"),
+        (recording(times=np.arange(0, 500) / 10), r"rec.csv: the signals cover 0 to 49.9 s, but the rollout lasts 0 to 22 s$"),
         (recording(times=np.arange(0, 23) * 1.0), r"rec.csv: one sample every 1 s, but the rollout is recorded at 100 samples/s"),
         (
             recording(times=np.where(np.arange(221) >= 50, TIMES + 0.03, TIMES)),

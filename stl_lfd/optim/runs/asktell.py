@@ -99,6 +99,9 @@ def ask(
         if file_task is not None:
             check_resume(Path(out), task, run.inputs(), file_task, given)
         if trials is not None and trials != task.optimizer.trials:
+            done = len(run.trials())
+            if trials < done:
+                raise ConfigError(f"--iterations {trials}: the run {out} has {done} trials already; ask for at least {done}")
             task = task.with_overrides(trials=trials)
             run.write_task(task)  # the budget `tell` and `report` count with, as --resume -N extends a run
         pending = _live_pending(run)
