@@ -332,13 +332,15 @@ def rollout(
             result = skill.execute(runner, rate, reference=reference)
         elapsed = time.perf_counter() - start
         write_signal_csv(result.signals, output if output is not None else sys.stdout)
-    simulated = result.signals.duration
-    print(
-        f"{backend.value} rollout in {skill.scene.name}: {simulated:.2f} s simulated in {elapsed:.2f} s "
-        f"({simulated / max(elapsed, 1e-9):.0f}x real time); tracking error RMS {1000 * result.tracking_rms:.2f} mm, "
-        f"worst {1000 * result.tracking_max:.2f} mm" + (f"; wrote {output}" if output is not None else ""),
-        file=sys.stderr,
-    )
+    recorded = result.signals.duration
+    tracking = f"tracking error RMS {1000 * result.tracking_rms:.2f} mm, worst {1000 * result.tracking_max:.2f} mm"
+    if backend is BackendOption.kinematic:  # it plays the reference back: no speed or tracking to speak of
+        how = f"{recorded:.2f} s of the reference played back (no dynamics)"
+    elif backend is BackendOption.pybullet:
+        how = f"{recorded:.2f} s simulated in {elapsed:.2f} s ({recorded / max(elapsed, 1e-9):.0f}x real time); {tracking}"
+    else:
+        how = f"{recorded:.2f} s executed by the command in {elapsed:.2f} s; {tracking}"
+    print(f"{backend.value} rollout in {skill.scene.name}: {how}" + (f"; wrote {output}" if output is not None else ""), file=sys.stderr)
 
 
 LONG_ROLLOUT_SECONDS = 120.0  # simulated seconds from which a rollout shows a progress bar
