@@ -141,7 +141,9 @@ def robustness(
     """Print the robustness of a recorded signal with respect to a specification.
 
     The robustness is the value at the first sample; it is positive exactly when the signal
-    satisfies the specification. Without --json, stdout gets the number and stderr a verdict.
+    satisfies the specification. Without --json, stdout gets the number and stderr a verdict
+    naming the semantics. The default is the classic robustness; 'stlopt optimize' scores
+    with the new one by default (--semantics new reproduces its numbers; the verdicts agree).
 
     Example:
 
@@ -157,7 +159,8 @@ def robustness(
         print(json.dumps(result.to_json()))
     else:
         print(f"{result.robustness:.10g}")
-        print("satisfied" if result.satisfied else "violated", file=sys.stderr)
+        which = "classic robustness" if semantics is SemanticsOption.classic else f"new robustness, nu = {nu:g}"
+        print(f"{'satisfied' if result.satisfied else 'violated'} ({which})", file=sys.stderr)
 
 
 @app.command(cls=_PlainUsage)

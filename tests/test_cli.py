@@ -37,10 +37,10 @@ def test_robustness_reproduces_the_papers_example():
     satisfied = invoke("robustness", EXAMPLE, S1)
     assert satisfied.exit_code == 0
     assert float(satisfied.stdout) == pytest.approx(0.1)
-    assert satisfied.stderr.strip() == "satisfied"
+    assert satisfied.stderr.strip() == "satisfied (classic robustness)"
     violated = invoke("robustness", EXAMPLE, S2)
     assert float(violated.stdout) == pytest.approx(-0.05)
-    assert violated.stderr.strip() == "violated"
+    assert violated.stderr.strip() == "violated (classic robustness)"
 
 
 def test_robustness_json_and_stdin():
