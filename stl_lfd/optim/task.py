@@ -17,6 +17,7 @@ from stl_lfd.limits import MAX_PLACEMENTS, MAX_STATES, samples_problem
 from stl_lfd.optim.settings import SINGLE_SKILL, Optimizer, Parameters, choice, located, optimizer_from_yaml, parameters_from_yaml
 from stl_lfd.poses import Pose
 from stl_lfd.sim.command import DEFAULT_TIMEOUT, Command
+from stl_lfd.sim.scene import scene_reference
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
 
@@ -200,7 +201,7 @@ def parse_task(data: dict[str, Any], path: Path) -> Task:
         demos=_existing(base, data["demos"], path, "demos") if "demos" in data else None,
         behaviour=behaviour,
         states=integer(data.get("states", 6), path, "states", minimum=1, maximum=MAX_STATES),
-        scene=_scene(base, data["scene"], path) if "scene" in data else _behaviour_scene(behaviour) if behaviour else "free_space",
+        scene=scene_reference(str(data["scene"]), path, "task") if "scene" in data else _behaviour_scene(behaviour) if behaviour else "free_space",
         backend=backend,
         semantics=semantics,
         nu=number(data.get("nu", 1.0), path, "nu", positive=True),
@@ -223,16 +224,6 @@ def _behaviour_scene(behaviour: Path) -> str:
     from stl_lfd.skill.behaviour import load_behaviour
 
     return load_behaviour(behaviour).scene
-
-
-def _scene(base: Path, value: Any, path: Path) -> str:
-    """A built-in scene's name, or a scene file's path (relative to the task file's folder)."""
-    text = str(value)
-    if not (text.endswith((".yaml", ".yml")) or "/" in text):
-        return text
-    if not (base / text).exists() and Path(text).exists():  # resolved from the working directory by older versions
-        return str(Path(text).resolve())
-    return str(_existing(base, text, path, "scene").resolve())
 
 
 def _placements(data: dict[str, Any], path: Path, scene_name: str) -> tuple[dict[str, Pose], ...]:

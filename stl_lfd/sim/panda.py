@@ -156,10 +156,6 @@ class PandaWorld:
         local, _ = self.client.multiplyTransforms(inverse[0], inverse[1], frame.pose.position, (0.0, 0.0, 0.0, 1.0))
         return body, (None if max(abs(value) for value in local) < 1e-12 else local)
 
-    def frame_positions(self) -> np.ndarray:
-        """`F x 3` positions of the scene's frames now (a grasped shaft's frame moves with it)."""
-        return self.frame_poses()[0]
-
     def frame_poses(self) -> tuple[np.ndarray, np.ndarray]:
         """`F x 3` positions of the scene's frames now, and `F x 4` orientations of their first
         objects (a grasped shaft's frame and orientation move with it)."""
@@ -335,11 +331,11 @@ class PyBulletBackend:
         fingers = np.empty(steps + 1)
         forces = np.empty(steps + 1)
         frames = np.empty((steps + 1, len(scene.frames), 3))
-        frame_tilts = np.empty((steps + 1, len(scene.frames)))
+        frame_orientations = np.empty((steps + 1, len(scene.frames), 4))
         world.reset(targets[0], openings[0], turns[0])
         events = list(reference.events)
         (positions[0], orientations[0]), fingers[0], forces[0] = world.end_effector_pose(), world.gripper_opening(), world.contact_force()
-        frames[0], frame_tilts[0] = _positions_and_tilts(world)
+        frames[0], frame_orientations[0] = world.frame_poses()
         if observer is not None:
             observer(0.0, world)
         for step in range(1, steps + 1):
@@ -349,12 +345,13 @@ class PyBulletBackend:
             world.command(targets[step], openings[step], turns[step])
             world.step()
             (positions[step], orientations[step]), fingers[step], forces[step] = world.end_effector_pose(), world.gripper_opening(), world.contact_force()
-            frames[step], frame_tilts[step] = _positions_and_tilts(world)
+            frames[step], frame_orientations[step] = world.frame_poses()
             if observer is not None:
                 observer(step_times[step], world)
         if not np.isfinite(positions).all():
             raise ExecutionError("rollout: the simulation diverged (non-finite end-effector positions)")
         forces = low_pass(forces, scene.force_filter_hz, TIME_STEP)
+        frame_tilts = rotations.uprightness(frame_orientations)  # once, for every step and frame
         return _record(step_times, positions, rotations.continuous(orientations), fingers, forces, (frames, frame_tilts), scene, reference, rate)
 
     def close(self) -> None:
@@ -367,13 +364,6 @@ class PyBulletBackend:
 
     def __exit__(self, *exception: object) -> None:
         self.close()
-
-
-def _positions_and_tilts(world: PandaWorld) -> tuple[np.ndarray, np.ndarray]:
-    """The frames' positions and their objects' tilts (rad, the angle between the first
-    object's own z axis, a cylinder's axis, and straight up: 0 for an upright shaft)."""
-    positions, orientations = world.frame_poses()
-    return positions, rotations.uprightness(orientations)
 
 
 def low_pass(values: np.ndarray, cutoff_hz: float, period: float) -> np.ndarray:

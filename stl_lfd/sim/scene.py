@@ -297,6 +297,21 @@ def builtin_scenes() -> list[str]:
     return sorted(entry.name[: -len(".yaml")] for entry in folder.iterdir() if entry.name.endswith(".yaml"))
 
 
+def scene_reference(text: str, source: Path, kind: str) -> str:
+    """A scene as the `kind` file `source` (a task or behaviour file) names it: a built-in
+    scene's name as it is, or a scene file's absolute path, `text` read relative to `source`'s
+    folder (older versions read it from the working directory, which is still accepted when
+    only that exists). ConfigError naming `source` when the file does not exist."""
+    if not (text.endswith((".yaml", ".yml")) or "/" in text):
+        return text
+    resolved = Path(text) if Path(text).is_absolute() else source.parent / text
+    if not resolved.exists() and Path(text).exists():
+        resolved = Path(text)
+    if not resolved.exists():
+        raise ConfigError(f"{source}: 'scene' names {text}, which does not exist (paths are relative to the {kind} file)")
+    return str(resolved.resolve())
+
+
 def load_scene(name_or_path: str | Path) -> Scene:
     """A built-in scene by name (`free_space`, ...) or a scene YAML file by path."""
     text = str(name_or_path)

@@ -29,6 +29,7 @@ from stl_lfd.hsmm.spread import MinimumSpread, parse_min_spread
 from stl_lfd.poses import Pose
 from stl_lfd.rotations import DOWN
 from stl_lfd.sim import TIME_STEP, Reference
+from stl_lfd.sim.scene import scene_reference
 from stl_lfd.skill.execution import reference_of
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
@@ -91,19 +92,7 @@ def load_behaviour(path: str | Path) -> Behaviour:
         raise ConfigError(f"{path}: 'steps' has no skill")
     if len(set(names)) != len(names):
         raise ConfigError(f"{path}: skill names must be unique (got {', '.join(names)})")
-    return Behaviour(str(data.get("description", path.stem)), _scene(str(data["scene"]), path), parsed, path)
-
-
-def _scene(text: str, path: Path) -> str:
-    """A built-in scene's name, or a scene file's path (relative to the behaviour file)."""
-    if not (text.endswith((".yaml", ".yml")) or "/" in text):
-        return text
-    resolved = Path(text) if Path(text).is_absolute() else path.parent / text
-    if not resolved.exists() and Path(text).exists():  # resolved from the working directory by older versions
-        resolved = Path(text)
-    if not resolved.exists():
-        raise ConfigError(f"{path}: 'scene' names {text}, which does not exist (paths are relative to the behaviour file)")
-    return str(resolved.resolve())
+    return Behaviour(str(data.get("description", path.stem)), scene_reference(str(data["scene"]), path, "behaviour"), parsed, path)
 
 
 def _step(item: Any, path: Path, index: int) -> SkillStep | ActionStep:
