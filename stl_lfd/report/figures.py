@@ -68,16 +68,22 @@ def tilt(run: RunData) -> Figure | None:
         return None
     figure = Figure(figsize=(8, 4), layout="constrained")
     axes = figure.subplots()
-    numbers = [number for number in tables if number > 0]
-    for color, number in zip(_trial_colors(len(numbers)), numbers):
-        axes.plot(tables[number].times, np.degrees(tables[number].columns["tilt"]), color=color, lw=1)
-    if 0 in tables:
-        axes.plot(tables[0].times, np.degrees(tables[0].columns["tilt"]), color=INITIAL, ls="--", label="unoptimised")
-    if run.best is not None and run.best.trial in tables:
-        axes.plot(tables[run.best.trial].times, np.degrees(tables[run.best.trial].columns["tilt"]), color=BEST, lw=2, label="best")
+    _per_trial(axes, run, {number: (table.times, np.degrees(table.columns["tilt"])) for number, table in tables.items()})
     axes.set(xlabel="t (s)", ylabel="tilt (degrees from straight down)", title="the hand's tilt per trial")
     axes.legend(loc="best")
     return figure
+
+
+def _per_trial(axes, run: RunData, curves: dict[int, tuple[np.ndarray, np.ndarray]]) -> None:
+    """Each trial's curve (trial number -> times, values; 0 the unoptimised skill) in its
+    colour, the unoptimised one dashed and the best one in red, both labelled."""
+    numbers = [number for number in curves if number > 0]
+    for color, number in zip(_trial_colors(len(numbers)), numbers):
+        axes.plot(*curves[number], color=color, lw=1)
+    if 0 in curves:
+        axes.plot(*curves[0], color=INITIAL, ls="--", label="unoptimised")
+    if run.best is not None and run.best.trial in curves:
+        axes.plot(*curves[run.best.trial], color=BEST, lw=2, label="best")
 
 
 def region_distances(run: RunData) -> Figure | None:
@@ -306,13 +312,7 @@ def contact_forces(run: RunData) -> Figure | None:
         return None
     figure = Figure(figsize=(8, 4), layout="constrained")
     axes = figure.subplots()
-    numbers = [number for number in tables if number > 0]
-    for color, number in zip(_trial_colors(len(numbers)), numbers):
-        axes.plot(tables[number].times, tables[number].columns["force"], color=color, lw=1)
-    if 0 in tables:
-        axes.plot(tables[0].times, tables[0].columns["force"], color=INITIAL, ls="--", label="unoptimised")
-    if run.best is not None and run.best.trial in tables:
-        axes.plot(tables[run.best.trial].times, tables[run.best.trial].columns["force"], color=BEST, lw=2, label="best")
+    _per_trial(axes, run, {number: (table.times, table.columns["force"]) for number, table in tables.items()})
     title = "contact force per trial"
     shown = [tables[number].columns["force"] for number in (0, run.best.trial if run.best is not None else None) if number in tables]
     highest = max((float(np.max(force)) for force in shown), default=0.0)

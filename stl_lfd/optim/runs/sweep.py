@@ -92,13 +92,13 @@ def local_map(function: Callable[[Any], Any], items: Iterable[Any], jobs: int) -
     try:
         for future in as_completed(futures):
             yield futures[future], future.result()
-    except BrokenProcessPool:
+    except BaseException as error:  # Ctrl-C, a failed item or a dead worker: stop the workers now
         stop_children()
         pool.shutdown(wait=True, cancel_futures=True)
-        raise RunError("a worker process died (killed, or crashed); the cells in flight are lost: run the same command again to do the missing ones") from None
-    except BaseException:  # Ctrl-C or a failed item: stop the workers now, not after their items
-        stop_children()
-        pool.shutdown(wait=True, cancel_futures=True)
+        if isinstance(error, BrokenProcessPool):
+            raise RunError(
+                "a worker process died (killed, or crashed); the cells in flight are lost: run the same command again to do the missing ones"
+            ) from None
         raise
     pool.shutdown()
 
