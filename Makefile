@@ -6,13 +6,17 @@ STAMP := $(VENV)/.installed
 
 .PHONY: run test test-fast lint docs bench bench-optim clean
 
+# pip's output goes to $(VENV)/install.log (its tail is shown if it fails). torch comes first and
+# pinned: this version resolves to a CPU build.
 $(STAMP): pyproject.toml
-	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --upgrade pip
-	# torch first and pinned: this version resolves to a CPU build
-	$(BIN)/pip install --quiet torch==2.13.0
-	$(BIN)/pip install --quiet -e '.[test]'
-	touch $(STAMP)
+	@echo "installing stlopt and its dependencies (torch, BoTorch, PyBullet) into $(VENV); a few minutes, once ..."
+	@$(PYTHON) -m venv $(VENV) && { \
+	  $(BIN)/pip install --upgrade pip && \
+	  $(BIN)/pip install torch==2.13.0 && \
+	  $(BIN)/pip install -e '.[test]'; } > $(VENV)/install.log 2>&1 || { \
+	  tail -n 15 $(VENV)/install.log; echo "installation failed; pip's whole log is in $(VENV)/install.log"; exit 1; }
+	@touch $(STAMP)
+	@echo "installed; pip's log is in $(VENV)/install.log"
 
 # The main job: learn the skill from the bundled demonstrations and optimise it for phi1 with the
 # PyBullet backend (the task's method, 32 trials), printing the robustness before and after, then
@@ -22,11 +26,9 @@ RUN_DIR := runs/main
 
 run: $(STAMP)
 	@if [ -d $(RUN_DIR)/phi1 ]; then resume=--resume; else resume=; fi; \
-	  $(BIN)/stlopt optimize configs/phi1.yaml --out $(RUN_DIR)/phi1 $$resume > /dev/null
-	$(BIN)/stlopt report $(RUN_DIR)/phi1 > /dev/null
-	@echo "Results are in $(RUN_DIR)/phi1/: the learned skill (model.npz), the optimised one (best_model.npz),"
-	@echo "summary.json, trials.jsonl and signals/, and the figures in $(RUN_DIR)/phi1/report/index.html."
-	@echo "Watch the result: $(BIN)/stlopt replay $(RUN_DIR)/phi1 --video $(RUN_DIR)/phi1-best.mp4"
+	  $(BIN)/stlopt optimize configs/phi1.yaml --out $(RUN_DIR)/phi1 --quiet $$resume > /dev/null
+	@$(BIN)/stlopt report $(RUN_DIR)/phi1 > /dev/null
+	@echo "watch the best trial: $(BIN)/stlopt replay $(RUN_DIR)/phi1 --video $(RUN_DIR)/phi1-best.mp4"
 
 # Two test processes (one per core), each single-threaded: BLAS and torch threads of two
 # processes would otherwise compete for the same two cores. The console examples of each page

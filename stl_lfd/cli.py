@@ -245,7 +245,7 @@ def _print_summary(rows: list[dict], names: list[str]) -> None:
 
 @app.command(cls=_PlainUsage)
 def retrieve(
-    model_file: Path = typer.Argument(..., metavar="MODEL_FILE", help="Model file written by 'stlopt learn'."),
+    model_file: Path = typer.Argument(..., metavar="MODEL", help="Model file written by 'stlopt learn'."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="CSV to write (default: stdout)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to retrieve (default: the model's expected duration)."),
     rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second of the output (default: the model's rate)."),
@@ -292,7 +292,7 @@ def retrieve(
 
 @app.command(cls=_PlainUsage)
 def rollout(
-    model_file: Path = typer.Argument(..., metavar="SKILL_FILE", help="Model file written by 'stlopt learn', or a behaviour file (.yaml)."),
+    model_file: Path = typer.Argument(..., metavar="MODEL_OR_BEHAVIOUR", help="Model file written by 'stlopt learn', or a behaviour file (.yaml)."),
     scene: Optional[str] = typer.Option(None, help="Built-in scene name or a scene .yaml file (default: the behaviour's, or free_space)."),
     backend: BackendOption = typer.Option(
         BackendOption.pybullet, help="pybullet simulates a Panda; kinematic records the reference itself; command runs --command."
@@ -405,7 +405,9 @@ def _check_duration_and_rate(duration: Optional[float], rate: float) -> None:
 
 @app.command(cls=_PlainUsage)
 def replay(
-    source: Path = typer.Argument(..., metavar="SOURCE", help="A model file, a behaviour file, or a run directory written by 'stlopt optimize'."),
+    source: Path = typer.Argument(
+        ..., metavar="MODEL_BEHAVIOUR_OR_RUN", help="A model file, a behaviour file, or a run directory written by 'stlopt optimize'."
+    ),
     trial: str = typer.Option("best", "--trial", help="For a run directory: 'best', 'initial' (the unoptimised skill) or a trial number."),
     gui: bool = typer.Option(False, "--gui", help="Show the PyBullet GUI in real time (needs a display)."),
     video: Optional[Path] = typer.Option(None, "--video", help="Record a video (.mp4 or .gif) headless."),
@@ -461,6 +463,7 @@ def optimize(
     command_timeout: Optional[float] = CommandTimeoutOption,
     workers: Optional[int] = typer.Option(None, "--workers", help="Trials run at once, each batch proposed together (default: the task's, or 1)."),
     place: list[str] = typer.Option([], "--place", help=PLACE_HELP + " Replaces the task's placements."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="On stderr, only what runs and the verdict (no line per trial); errors still show."),
 ) -> None:
     """Optimise a skill so that its execution satisfies the task's STL specification.
 
@@ -495,10 +498,11 @@ def optimize(
             task = given.applied_to(file_task)
             if given.command is not None and task.backend != "command":
                 raise ConfigError(f"--command is for --backend command (the run's backend is {task.backend})")
-            prepared = start_run(task, run_dir, lambda message: print(message, file=sys.stderr), inputs_record(file_task, given, task))
+            say = (lambda message: None) if quiet else (lambda message: print(message, file=sys.stderr))
+            prepared = start_run(task, run_dir, say, inputs_record(file_task, given, task))
     again = f"stlopt optimize {task_file} --out {run_dir} --resume"
     with prepared, user_errors(on_interrupt=f"interrupted; the finished trials are kept. Continue with: {again}"):
-        printer = TrialPrinter(prepared)
+        printer = TrialPrinter(prepared, quiet=quiet)
         summary = finish_run(prepared, printer.trial)
         printer.done(summary)
     print(json.dumps(summary.to_json(), indent=2))
@@ -571,7 +575,7 @@ def tell(
 ) -> None:
     """Record the signals of the trial 'stlopt ask' handed out, and print its robustness.
 
-    Example:
+    Examples:
 
     \b
         stlopt tell runs/robot signals.csv

@@ -1,4 +1,7 @@
-"""What `stlopt optimize` shows on stderr while it runs: a header, one line per trial, a verdict."""
+"""What `stlopt optimize` shows on stderr while it runs: a header, one line per trial, a verdict.
+
+With `quiet`, only one line on what runs and the verdict (what `make run` shows).
+"""
 
 from __future__ import annotations
 
@@ -12,13 +15,22 @@ from stl_lfd.optim.trials import Trial
 class TrialPrinter:
     """Prints a line per finished trial: number, phase, robustness, best so far, satisfied, time."""
 
-    def __init__(self, prepared: PreparedRun, console: Console | None = None) -> None:
+    def __init__(self, prepared: PreparedRun, console: Console | None = None, quiet: bool = False) -> None:
         self.console = console or Console(stderr=True, highlight=False, soft_wrap=True)
+        self.quiet = quiet
         task, summary = prepared.task, prepared.summary
         optimizer = task.optimizer
         done = len(prepared.history)
         self.budget = optimizer.trials
         initial = summary.initial_robustness
+        if quiet:
+            if done >= optimizer.trials:
+                doing = f"the run is complete ({done} trials)"
+            else:
+                doing = f"trials {done + 1} to {optimizer.trials}" if done else f"{optimizer.trials} trials"
+                doing += f" of method {optimizer.method}"
+            self.console.print(f"{task.name}: {task.spec.name}, {doing} on the {task.backend} backend -> {prepared.run.path}")
+            return
         self.console.print(
             f"[bold]{task.name}[/]: {task.spec.name}, {task.semantics} robustness, {prepared.space.dimension} parameters, "
             f"{task.backend} backend -> {prepared.run.path}"
@@ -33,6 +45,8 @@ class TrialPrinter:
         self.console.print(f"[dim]{'trial':>7} {'phase':>7} {'robustness':>11} {'best':>11} {'satisfied':>9} {'time':>7}[/]")
 
     def trial(self, trial: Trial, best: Trial | None) -> None:
+        if self.quiet:
+            return
         value = f"{trial.robustness:+.5f}" if trial.robustness is not None else "failed"
         best_value = f"{best.robustness:+.5f}" if best is not None else "-"
         mark = f"{'[green]yes[/]' if trial.satisfied else 'no':>{9 + (len('[green][/]') if trial.satisfied else 0)}}"

@@ -7,6 +7,7 @@ import re
 import shutil
 import subprocess
 import sys
+from itertools import takewhile
 from pathlib import Path
 
 import pytest
@@ -59,6 +60,37 @@ def test_the_options_are_what_help_prints():
         assert all(option in printed for option in listed_options(command)), name
     assert {"-K", "--states", "-o", "--output", "--plot"} <= set(listed_options(COMMANDS["learn"]))
     assert "--help" not in listed_options(COMMANDS["learn"])
+
+
+def argument_names(command) -> list[str]:
+    """The positional arguments' names as `stlopt COMMAND --help` shows them (their metavars)."""
+    return [parameter.metavar or parameter.name.upper() for parameter in command.params if parameter.param_type_name == "argument"]
+
+
+def usage_arguments(line: str, name: str) -> list[str]:
+    """The upper-case words after `stlopt NAME` in a usage line, up to its first option."""
+    words = line.split(f"stlopt {name}", 1)[1].split()
+    return list(takewhile(lambda word: re.fullmatch(r"[A-Z][A-Z_]*", word), words))
+
+
+def readme_usages() -> dict[str, str]:
+    """Command name -> its usage in the README's command table."""
+    rows = re.findall(r"^\| `(stlopt ([a-z]+)[^`]*)`", (ROOT / "README.md").read_text(), flags=re.M)
+    return {name: usage for usage, name in rows}
+
+
+@pytest.mark.parametrize("name", sorted(COMMANDS))
+def test_the_docs_name_the_arguments_as_help_does(name):
+    names = argument_names(COMMANDS[name])
+    section = cli_sections()[name]
+    usage_block = section.split("```text", 1)[1].split("```", 1)[0]
+    usages = [line for line in usage_block.splitlines() if line.startswith(f"stlopt {name}")]
+    assert usages, f"docs/cli.md, section `stlopt {name}`: no usage line"
+    for line in [*usages, readme_usages()[name]]:
+        shown = usage_arguments(line, name)
+        assert shown == names[: len(shown)], f"{line!r} names the arguments {shown}, --help {names}"
+        required = [parameter.metavar for parameter in COMMANDS[name].params if parameter.param_type_name == "argument" and parameter.required]
+        assert len(shown) >= len(required), f"{line!r} leaves out {required[len(shown) :]}"
 
 
 def test_the_result_pages_are_generated_from_the_records():

@@ -232,3 +232,20 @@ def test_console_example(page, index, scratch):
     assert (result.returncode != 0) == expects_error, f"{where} exited {result.returncode}: {result.stderr[-500:]}"
     problem = output_matches(example.expected, result.stdout, result.stderr)
     assert not problem, f"{where}: {problem}"
+
+
+def recipe_lines(makefile: str, target: str) -> list[str]:
+    """The recipe lines (tab-indented, continuations joined) of `target` in a Makefile's text."""
+    body = makefile.split(f"\n{target}:", 1)[1].split("\n\n", 1)[0]
+    joined = body.replace("\\\n", " ")
+    return [line[1:] for line in joined.splitlines()[1:] if line.startswith("\t")]
+
+
+@pytest.mark.parametrize("target", ["$(STAMP)", "run"])
+def test_make_run_echoes_no_recipe_line(target):
+    """`make run` speaks in sentences: every line of its recipes (and the install's) is silent (@)."""
+    lines = recipe_lines((ROOT / "Makefile").read_text(), target)
+    assert lines, f"no recipe for {target}"
+    assert all(line.startswith("@") for line in lines), [line for line in lines if not line.startswith("@")]
+    echoes = [line for line in lines if line.startswith("@echo")]
+    assert 1 <= len(echoes) <= 2

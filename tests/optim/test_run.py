@@ -111,6 +111,10 @@ def test_cli_optimize_prints_the_summary_and_protects_existing_runs(tmp_path, le
     assert extended.exit_code == 0, extended.stderr
     assert json.loads(extended.stdout)["trials"] == 5
     assert "resuming after trial 4" in extended.stderr
+    quiet = runner.invoke(app, ["optimize", str(task), "--out", str(out), "--resume", "--iterations", "6", "--quiet"])
+    assert quiet.exit_code == 0, quiet.stderr
+    lines = quiet.stderr.splitlines()
+    assert len(lines) == 2 and "trials 6 to 6 of method" in lines[0] and lines[1].startswith("best: trial")
 
 
 @pytest.mark.slow
