@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from stl_lfd.key_positions import with_position
+
 
 class StlLfdError(Exception):
     """Base class of all user-facing errors."""
@@ -78,9 +80,15 @@ class SignalError(StlLfdError):
 
 
 class ConfigError(StlLfdError):
-    """A task, scene or behaviour file has an unknown key or a value that makes no sense."""
+    """A task, scene or behaviour file has an unknown key or a value that makes no sense.
+
+    A message `FILE: 'key' ...` about a YAML file that was read gets the key's line and column.
+    """
 
     exit_code = 5
+
+    def __init__(self, message: str) -> None:
+        super().__init__(with_position(message))
 
 
 class ModelError(StlLfdError):

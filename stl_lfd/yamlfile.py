@@ -1,7 +1,9 @@
 """Reading YAML files (scenes, task files) with errors that name the file, the key and the line.
 
 Every reader checks its keys against what it knows, so that a typo is an error rather than a
-silently ignored setting.
+silently ignored setting. `read_yaml` remembers where each key of the file is, so that a
+`ConfigError` about `FILE: 'a.b[2].c' ...` is shown as `FILE:LINE:COLUMN: 'a.b[2].c' ...`
+(see `stl_lfd.key_positions`).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import yaml
 from stl_lfd.dag import fold
 from stl_lfd.errors import ConfigError
 from stl_lfd.files import UnreadableFile, read_text
+from stl_lfd.key_positions import remember
 
 MAX_BYTES = 1_000_000  # task, scene and behaviour files are a few hundred bytes
 MAX_NODES = 100_000  # values after expanding aliases (`*name`), against alias bombs
@@ -58,6 +61,7 @@ def read_yaml(path: Path | str) -> dict[str, Any]:
             if root is not None and _expanded_size(root) > MAX_NODES:
                 raise ConfigError(f"{path}: its aliases expand to more than {MAX_NODES} values; write the settings out")
             data = loader.construct_document(root) if root is not None else None
+            _remember_positions(str(path), root)
         finally:
             loader.dispose()
     except yaml.YAMLError as error:
@@ -70,6 +74,26 @@ def read_yaml(path: Path | str) -> dict[str, Any]:
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: expected a mapping of keys at the top level")
     return data
+
+
+def _remember_positions(name: str, root: yaml.Node | None) -> None:
+    """Record where each key (and each list item) of the document starts."""
+    positions: dict[str, tuple[int, int]] = {}
+    stack: list[tuple[str, yaml.Node]] = [("", root)] if root is not None else []
+    while stack and len(positions) <= MAX_NODES:
+        prefix, node = stack.pop()
+        if isinstance(node, yaml.MappingNode):
+            for key_node, value_node in node.value:
+                if isinstance(key_node, yaml.ScalarNode):
+                    key = f"{prefix}.{key_node.value}" if prefix else str(key_node.value)
+                    positions.setdefault(key, (key_node.start_mark.line + 1, key_node.start_mark.column + 1))
+                    stack.append((key, value_node))
+        elif isinstance(node, yaml.SequenceNode):
+            for index, item in enumerate(node.value):
+                key = f"{prefix}[{index}]"
+                positions.setdefault(key, (item.start_mark.line + 1, item.start_mark.column + 1))
+                stack.append((key, item))
+    remember(name, positions)
 
 
 def _expanded_size(root: yaml.Node) -> int:

@@ -118,10 +118,10 @@ def test_sidecar_problems_are_one_clear_error(tmp_path):
     with pytest.raises(ConfigError, match=r"demo_02.frames.yaml: frames cup differ from demo_01.frames.yaml \(shaft\)"):
         learn_from_folder(folder, 4)
     (folder / "demo_02.frames.yaml").write_text("frames:\n  shaft: {position: [0.4, -0.2]}\n")
-    with pytest.raises(ConfigError, match=r"demo_02.frames.yaml: 'frames.shaft.position' must be a list of 3 numbers"):
+    with pytest.raises(ConfigError, match=r"demo_02.frames.yaml:2:11: 'frames.shaft.position' must be a list of 3 numbers"):
         learn_from_folder(folder, 4)
     (folder / "demo_02.frames.yaml").write_text("poses:\n  shaft: {position: [0.4, -0.2, 0.08]}\n")
-    with pytest.raises(ConfigError, match="demo_02.frames.yaml: unknown key 'poses'"):
+    with pytest.raises(ConfigError, match="demo_02.frames.yaml:1:1: unknown key 'poses'"):
         learn_from_folder(folder, 4)
     (folder / "demo_02.frames.yaml").write_text("frames:\n  base: {position: [0.4, -0.2, 0.08]}\n")
     with pytest.raises(ConfigError, match="other than 'base'"):

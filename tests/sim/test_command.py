@@ -105,7 +105,7 @@ def test_bundled_scenes_declare_safety_and_bad_limits_are_refused(tmp_path):
         assert load_scene(name).safety is not None
     path = tmp_path / "scene.yaml"
     path.write_text("description: x\nsafety:\n  workspace: {lower: [0.5, 0, 0], upper: [0.4, 1, 1]}\n  max_speed: 1\n")
-    with pytest.raises(ConfigError, match=r"scene.yaml: 'safety': the workspace's lower corner .* below its upper corner"):
+    with pytest.raises(ConfigError, match=r"scene.yaml:\d+:\d+: 'safety': the workspace's lower corner .* below its upper corner"):
         load_scene(path)
     path.write_text("description: x\nsafety:\n  workspace: {lower: [0, 0, 0], upper: [1, 1, 1]}\n")
     with pytest.raises(ConfigError, match="max_speed"):
