@@ -6,8 +6,10 @@ operands stand for empty windows: +inf is the identity of a conjunction, -inf of
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
+from numpy.lib.stride_tricks import as_strided, sliding_window_view
 
 # Largest number of array elements a windowed evaluation materialises at once.
 _CHUNK_ELEMENTS = 1 << 22
@@ -128,37 +130,394 @@ def until_windows(left: np.ndarray, right: np.ndarray, lo: int, width: int, coun
     Returns:
         `... x count` array.
     """
+    if conjunction is not classic_conjunction:
+        return _new_until(np.asarray(left, dtype=float), np.asarray(right, dtype=float), lo, width, count, nu)
     length = count + width - 1
     left_windows = sliding_window_view(_pad(left, length, np.inf), width, axis=-1)
     right_windows = sliding_window_view(_pad(right, length, -np.inf), width, axis=-1)
     batch = int(np.prod(left.shape[:-1], dtype=int))
-    classic = conjunction is classic_conjunction
-    cost = width if classic else width * width
-    step = max(1, _CHUNK_ELEMENTS // max(1, batch * cost))
+    step = max(1, _CHUNK_ELEMENTS // max(1, batch * width))
     parts = []
     for begin in range(0, count, step):
         chunk = slice(begin, min(begin + step, count))
         lefts, rights = left_windows[..., chunk, :], right_windows[..., chunk, :]  # ... x c x width
-        if classic:
-            before = np.minimum.accumulate(lefts, axis=-1)
-            before = np.concatenate([np.full_like(before[..., :1], np.inf), before[..., :-1]], axis=-1)
-            candidates = np.minimum(rights, before)
-        else:
-            candidates = conjunction(_until_operands(lefts, rights), nu)  # ... x c x width
+        before = np.minimum.accumulate(lefts, axis=-1)
+        before = np.concatenate([np.full_like(before[..., :1], np.inf), before[..., :-1]], axis=-1)
+        candidates = np.minimum(rights, before)
         candidates[..., :lo] = -np.inf
-        parts.append(candidates.max(axis=-1) if classic else new_disjunction(candidates, nu))
+        parts.append(candidates.max(axis=-1))
     return np.concatenate(parts, axis=-1)
 
 
-def _until_operands(lefts: np.ndarray, rights: np.ndarray) -> np.ndarray:
-    """`... x width x width` operands: row j holds left[0..j-1], right[j], then +inf."""
-    width = lefts.shape[-1]
-    rows = np.arange(width)[:, None]
-    columns = np.arange(width)[None, :]
-    operands = np.where(columns < rows, lefts[..., None, :], np.inf)
-    diagonal = np.broadcast_to(rights[..., :, None], operands.shape[:-1] + (1,))
-    np.copyto(operands, np.broadcast_to(diagonal, operands.shape), where=columns == rows)
-    return operands
+# --- Until under the new robustness ---------------------------------------------------------
+#
+# Candidate (i, j) of `left U right` is the new conjunction of left[i .. i+j-1] and right[i+j].
+# With m its minimum and x_k = (v_k - m) / |m| >= 0 it is m N / D (m < 0) or N / D (m > 0),
+# D = sum_k exp(-nu x_k) and N = sum_k exp(-(1 + nu) x_k) (m < 0) or sum_k v_k exp(-nu x_k)
+# (m > 0): sums of positive terms of at most 1 (times v_k), so nothing overflows. Every term
+# depends on m through 1/m, so no sum carries over from one minimum to another: there is no
+# exact recursion over a growing window. But m is always one operand, the candidate's owner:
+# right[i+j] when it is below the prefix, else the first minimum q of the prefix. Each owner
+# sums its terms once, outward from itself, for every candidate it owns:
+# - right[i+j] sums left[i .. i+j-1] backwards: per output i a band of running sums over the
+#   chunk's outputs (samples < count) plus one total over the samples from count on;
+# - q does the same over left[i .. q-1], and keeps running sums forwards over left[q ..],
+#   shared by the owners of a flat stretch of equal minima.
+# The work is the owners' reach, at most (count + width) x width terms, where the matrix of
+# every candidate's operands cost count x width^2. A single output whose right operand stays
+# below left still needs its own sum for every j: width^2 / 2 terms, inherent to the formula.
+# The totals, the bulk of that case, are taken in cache-sized blocks of owners x samples.
+
+# Elements of one block of owners x samples: small enough to stay in cache.
+_BLOCK_ELEMENTS = 1 << 16
+# Up to this nu, exp(-nu x_k) is exp(-nu v_k / |m|) times a constant of the owner (one multiply
+# a term instead of three); above it the constant would leave the floating-point range.
+_FACTORED_NU_MAX = 20.0
+
+
+def _new_until(left: np.ndarray, right: np.ndarray, lo: int, width: int, count: int, nu: float) -> np.ndarray:
+    """`until_windows` under the new robustness: `... x n` operands -> `... x count`."""
+    shape = left.shape[:-1]
+    if lo >= width:
+        return np.full(shape + (count,), -np.inf)
+    length = count + width - 1
+    left = _pad(left, length, np.inf)[..., :length].reshape(-1, length)
+    right = _pad(right, length, -np.inf)[..., :length].reshape(-1, length)
+    step = max(1, _CHUNK_ELEMENTS // (4 * left.shape[0] * width))
+    parts = []
+    for begin in range(0, count, step):
+        outputs = min(step, count - begin)
+        samples = slice(begin, begin + outputs + width - 1)
+        with np.errstate(all="ignore"):  # entries that no candidate reads may overflow
+            parts.append(_disjunction(_until_candidates(left[:, samples], right[:, samples], lo, width, outputs, nu), nu))
+    return np.concatenate(parts, axis=-1).reshape(shape + (count,))
+
+
+def _until_candidates(left: np.ndarray, right: np.ndarray, lo: int, width: int, count: int, nu: float) -> np.ndarray:
+    """The new conjunction of left[i .. i+j-1] and right[i+j], for i < count and lo <= j < width.
+
+    Args:
+        left, right: `B x (count + width - 1)` arrays (padded with +inf and -inf).
+
+    Returns:
+        `B x count x (width - lo)` array.
+    """
+    before = _prefix_minima(left, width, count)  # B x count x width
+    prefix_min = before[..., lo:]  # min of left[i .. i+j-1]: +inf for j = 0
+    operand = sliding_window_view(right, width, axis=-1)[:, :count, lo:]  # right[i + j]
+    minimum = np.minimum(prefix_min, operand)
+    owned = np.isfinite(minimum) & (minimum != 0)  # -inf, +inf and 0 are their own values
+    by_right = owned & (operand < prefix_min)
+    values = _right_owned_ratios(left, right, by_right, lo, count, nu)  # garbage where not by_right
+    at_left = np.flatnonzero(owned & ~by_right)
+    if at_left.size:
+        sums = _left_owned_sums(left, right, _first_minima(left, before), at_left, lo, count, nu)
+        values.reshape(-1)[at_left] = sums[1] / sums[0]
+    np.multiply(values, minimum, out=values, where=minimum < 0)
+    np.copyto(values, minimum, where=~owned)
+    return values
+
+
+def _prefix_minima(left: np.ndarray, width: int, count: int) -> np.ndarray:
+    """Minimum of left[i .. i+j-1], +inf for j = 0: `B x count x width`, indexed by (row, i, j).
+
+    Args:
+        left: `B x (count + width - 1)` array.
+    """
+    windows = sliding_window_view(left, width, axis=-1)[:, :count]  # left[i + j]
+    before = np.empty(windows.shape)
+    before[..., 0] = np.inf
+    np.minimum.accumulate(windows[..., :-1], axis=-1, out=before[..., 1:])
+    return before
+
+
+def _first_minima(left: np.ndarray, before: np.ndarray) -> np.ndarray:
+    """The sample of the first occurrence of each prefix minimum `before` (from
+    `_prefix_minima`): `B x count x width` ints, from j = 1 on."""
+    count, width = before.shape[1:]
+    windows = sliding_window_view(left, width, axis=-1)[:, :count]
+    first = np.zeros(before.shape, dtype=np.int32)
+    np.copyto(first[..., 1:], np.arange(width - 1, dtype=np.int32), where=windows[..., :-1] < before[..., :-1])
+    np.maximum.accumulate(first, axis=-1, out=first)
+    first += np.arange(count, dtype=np.int32)[:, None]
+    return first
+
+
+def _right_owned_ratios(left: np.ndarray, right: np.ndarray, by_right: np.ndarray, lo: int, count: int, nu: float) -> np.ndarray:
+    """Numerator over weight sums of the candidates whose minimum is right[e], e = i + j: over
+    left[i .. e-1] and right[e] itself. `B x count x (width - lo)`, garbage elsewhere.
+
+    Per sample e: a total over left[count .. e-1] (where right[e] owns candidates) and, per
+    output i, running sums over left[i .. min(e, count) - 1]; candidate (i, j) reads both
+    through strided views.
+    """
+    batch, length = right.shape
+    offsets = by_right.shape[-1]
+    # right[e] owns some candidate exactly when it owns the one with the shortest prefix.
+    samples = np.arange(lo, length)
+    outputs = np.minimum(count - 1, samples - lo)
+    owner = np.zeros((batch, length), dtype=bool)
+    owner[:, lo:] = by_right[:, outputs, samples - outputs - lo]
+    rows, positions = np.nonzero(owner)
+    totals = np.zeros((2, batch, length))
+    scales = right[rows, positions]
+    totals[:, rows, positions] = _tail_sums(left, rows, count, positions, scales, nu)
+    totals[0] += 1.0  # right[e] itself: x = 0
+    totals[1] += np.where(right < 0, 1.0, right)
+    heads = np.zeros((2, count, batch, length))
+    values = left[:1, :count].T if batch == 1 else left[rows, :count].T
+    heads[:, :, rows, positions] = _band_sums(values, scales, positions, nu)
+    item = heads.itemsize
+    # heads[:, i, b, i + lo + j] as [:, b, i, j]
+    head_view = as_strided(
+        heads.reshape(-1)[lo:], shape=(2, batch, count, offsets), strides=(count * batch * length * item, length * item, (batch * length + 1) * item, item)
+    )
+    total_view = sliding_window_view(totals, length - count + 1, axis=-1)[:, :, :count, lo:]
+    numerators = np.add(head_view[1], total_view[1])
+    numerators /= np.add(head_view[0], total_view[0])
+    return numerators
+
+
+def _left_owned_sums(left: np.ndarray, right: np.ndarray, first: np.ndarray, at: np.ndarray, lo: int, count: int, nu: float) -> np.ndarray:
+    """Sums (weights, numerators) of the candidates at flat indices `at` of `B x count x (width -
+    lo)`, whose minimum is the first minimum q of their prefix: over left[i .. q-1], left[q ..
+    i+j-1] and right[i+j]. `2 x at.size`.
+
+    Per owner q: a total over left[count .. q-1], running sums over left[i .. min(q, count) - 1]
+    per output i, and running sums from q forwards, all shared by its candidates.
+    """
+    batch, length = left.shape
+    rows, outputs, owners, ends = _left_owners(at, first, lo, count)
+    keys = rows * length + owners
+    last = np.full(batch * length, -1)  # per sample: the last sample of the longest prefix it owns
+    np.maximum.at(last, keys, ends)
+    used = np.flatnonzero(last >= 0)
+    index = np.zeros(batch * length, dtype=np.int64)
+    index[used] = np.arange(used.size)
+    owner = index[keys]
+    owner_rows = used // length
+    positions = used - owner_rows * length
+    scales = left.reshape(-1)[used]
+    values = left[:1, :count].T if batch == 1 else left[owner_rows, :count].T
+    heads = _band_sums(values, scales, positions, nu).reshape(2, -1)  # 2 x (count x owners)
+    # Owners of equal value with no lower sample between them (a flat stretch of left) share
+    # one run of forward sums from the first of them, q0: from q they are C(e) - C(q - 1).
+    chained = np.zeros(used.size, dtype=bool)
+    chained[1:] = (owner_rows[1:] == owner_rows[:-1]) & (scales[1:] == scales[:-1]) & (np.minimum.reduceat(left.reshape(-1), used)[:-1] == scales[:-1])
+    chain = np.cumsum(~chained) - 1
+    firsts = np.flatnonzero(~chained)
+    starts = positions[firsts]
+    forward = _cumulative_sums(left, owner_rows[firsts], starts, np.maximum.reduceat(last[used], firsts) - starts + 1, scales[firsts], nu)
+    skipped = positions - starts[chain]  # terms of the chain before each owner
+    factors = np.take(forward.factors, chain, axis=1)
+    constants = _tail_sums(left, owner_rows, count, positions, scales, nu)
+    constants -= np.where(skipped > 0, np.take(forward.sums, forward.offsets[chain] + np.maximum(skipped, 1) - 1, axis=1), 0.0) * factors
+    bases = forward.offsets[chain] - starts[chain]  # run of C(e) at bases + e
+    # gathers along the last axis: np.take is several times faster than [:, index] here
+    sums = np.take(constants, owner, axis=1) + np.take(heads, outputs * used.size + owner, axis=1)
+    sums += np.take(forward.sums, bases[owner] + ends, axis=1) * np.take(factors, owner, axis=1)
+    sums += _terms(right.reshape(-1)[rows * length + ends + 1], scales[owner], nu)  # right[i + j]
+    return sums
+
+
+def _left_owners(at: np.ndarray, first: np.ndarray, lo: int, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Row, output i, owner sample q and last prefix sample i+j-1 of the candidates at flat
+    indices `at` of `B x count x (width - lo)`."""
+    width = first.shape[-1]
+    row_output = at // (width - lo)
+    offsets = at - row_output * (width - lo)
+    rows = row_output // count
+    outputs = row_output - rows * count
+    owners = first.reshape(-1)[row_output * width + lo + offsets]
+    return rows, outputs, owners, outputs + lo + offsets - 1
+
+
+def _band_sums(values: np.ndarray, scales: np.ndarray, positions: np.ndarray, nu: float) -> np.ndarray:
+    """Running sums, backwards over the first `count` samples, of the terms of left under the
+    scales of owners at samples `positions`: at [:, i, ...] the sums over left[i .. min(p,
+    count) - 1]. Garbage where those samples are not all above the scale.
+
+    Args:
+        values: `count x ...` left[i], broadcast against `scales` and `positions` (`...`).
+
+    Returns:
+        `2 x count x ...` array.
+    """
+    count = values.shape[0]
+    terms = _terms(values, scales, nu)  # 2 x count x ...
+    beyond = np.arange(count).reshape((count,) + (1,) * (terms.ndim - 2)) >= positions
+    np.copyto(terms, 0.0, where=beyond)
+    for sample in range(count - 2, -1, -1):  # a row at a time: faster than cumsum along an axis
+        terms[:, sample] += terms[:, sample + 1]
+    return terms
+
+
+def _disjunction(values: np.ndarray, nu: float) -> np.ndarray:
+    """`new_disjunction` along the last axis, computing only the branch each row takes: with
+    M the maximum and x = (M - v) / |M|, M sum w e^-x / sum w for M > 0 and sum v w / sum w for
+    M < 0, w = exp(-nu x); -inf operands drop out."""
+    maximum = values.max(axis=-1)
+    usable = np.isfinite(maximum) & (maximum != 0)  # else the maximum is the value
+    scales = np.where(usable, -maximum, -1.0)
+    weights, numerators = _terms(np.negative(values), scales[..., None], nu)  # the conjunction of -values
+    ratio = numerators.sum(axis=-1) / weights.sum(axis=-1)
+    return np.where(usable, -np.where(scales < 0, scales * ratio, ratio), maximum)
+
+
+@dataclass(frozen=True)
+class _Runs:
+    """Running sums of weights and numerators, one run per owner: the sums of its first t terms
+    (t >= 1) are `sums[:, offsets[owner] + t - 1]` times `factors[:, owner]`."""
+
+    sums: np.ndarray  # 2 x total
+    offsets: np.ndarray  # owners
+    factors: np.ndarray  # 2 x owners
+
+
+def _terms(values: np.ndarray, scales: np.ndarray, nu: float) -> np.ndarray:
+    """Weights exp(-nu x) and numerator terms of operands `values` of conjunctions whose minimum
+    is `scales` (finite, nonzero; broadcast against `values`), x = (v - m) / |m|.
+
+    The numerator term is exp(-(1 + nu) x) for m < 0 and v exp(-nu x) for m > 0; an +inf
+    operand gives 0 to both.
+
+    Returns:
+        `2 x ...` array: weights, numerators.
+    """
+    terms = np.empty((2,) + np.broadcast_shapes(np.shape(values), np.shape(scales)))
+    weights, numerators = terms
+    excess = np.subtract(values, scales, out=numerators)
+    excess /= np.abs(scales)
+    np.multiply(excess, -nu, out=weights)
+    np.exp(weights, out=weights)
+    if nu == 1:  # e^-x, the factor of a negative minimum's numerator
+        np.copyto(numerators, weights)
+    else:
+        np.negative(excess, out=numerators)
+        np.exp(numerators, out=numerators)
+    if np.isposinf(values).any():
+        values = np.where(values == np.inf, 0.0, values)
+    np.copyto(numerators, values, where=scales > 0)
+    numerators *= weights
+    return terms
+
+
+def _cumulative_sums(values: np.ndarray, rows: np.ndarray, starts: np.ndarray, lengths: np.ndarray, scales: np.ndarray, nu: float) -> _Runs:
+    """Running sums of the terms of values[row, start], values[row, start + 1], ... for
+    `length` samples, one run per owner (rows, starts, lengths, scales: owners).
+
+    Runs are taken by length in blocks of owners x samples, padded to the block's longest;
+    samples past a run are read but never summed into it, so they may be anything.
+    """
+    order = np.argsort(lengths, kind="stable")
+    order = order[lengths[order] > 0]
+    blocks = _blocks(lengths[order], _BLOCK_ELEMENTS)
+    spans = np.array([int(lengths[order[block][-1]]) for block in blocks], dtype=np.int64)
+    sizes = np.array([block.stop - block.start for block in blocks], dtype=np.int64) * spans
+    sums = np.empty((2, int(sizes.sum())))
+    offsets = np.zeros(lengths.size, dtype=np.int64)
+    factors = np.ones((2, lengths.size))
+    if order.size == 0:
+        return _Runs(sums, offsets, factors)
+    windows = sliding_window_view(_pad(values, values.shape[-1] + int(spans[-1]), np.inf), int(spans[-1]), axis=-1)
+    factored = nu <= _FACTORED_NU_MAX and np.all(np.isfinite((1 + nu) / np.abs(scales)))
+    if factored:  # the terms below are exp(-nu x) and its numerator up to these constants
+        negative = scales < 0
+        factors[0] = np.exp(np.where(negative, -nu, nu))
+        factors[1] = np.exp(np.where(negative, -(1 + nu), nu))
+    base = 0
+    for block, span, size in zip(blocks, spans, sizes):
+        owners = order[block]
+        terms = sums[:, base : base + size].reshape(2, -1, span)
+        offsets[owners] = base + np.arange(owners.size) * span
+        base += size
+        segment = windows[rows[owners], starts[owners], :span]
+        if factored:
+            _factored_terms(segment, scales[owners], nu, out=terms)
+        else:
+            terms[...] = _terms(segment, scales[owners, None], nu)
+        np.cumsum(terms, axis=-1, out=terms)
+    return _Runs(sums, offsets, factors)
+
+
+def _factored_terms(values: np.ndarray, scales: np.ndarray, nu: float, out: np.ndarray) -> None:
+    """`_terms` of `k x n` operands under `k` scales, each row divided by a constant: weights
+    exp(-nu v / |m|) and numerators exp(-(1 + nu) v / |m|) (m < 0) or v exp(-nu v / |m|) (m > 0),
+    into `out` (`2 x k x n`). Needs nu <= _FACTORED_NU_MAX and (1 + nu) / |m| finite."""
+    weights, numerators = out
+    magnitudes = np.abs(scales)[:, None]
+    np.multiply(values, -nu / magnitudes, out=weights)
+    np.exp(weights, out=weights)
+    negative = scales < 0
+    if nu == 1:
+        np.copyto(numerators, weights)
+    else:
+        np.multiply(values, -1 / magnitudes, out=numerators)
+        np.exp(numerators, out=numerators)
+    if not negative.all():
+        finite = np.where(values == np.inf, 0.0, values) if np.isposinf(values).any() else values
+        np.copyto(numerators, finite, where=~negative[:, None])
+    numerators *= weights
+
+
+def _tail_sums(left: np.ndarray, rows: np.ndarray, start: int, ends: np.ndarray, scales: np.ndarray, nu: float) -> np.ndarray:
+    """`2 x owners` sums of the terms of left[row, start .. end-1] under each owner's scale
+    (0 where end <= start).
+
+    Owners are taken by sign and by end, in blocks of owners x samples: the samples before the
+    block's first end belong to every owner of the block.
+    """
+    sums = np.zeros((2, ends.size))
+    for negative in (True, False):
+        group = np.flatnonzero((ends > start) & ((scales < 0) == negative))
+        group = group[np.argsort(ends[group], kind="stable")]
+        for block in _blocks(ends[group] - start, _BLOCK_ELEMENTS):
+            owners = group[block]
+            sums[:, owners] = _tail_block(left, rows[owners], start, ends[owners], scales[owners], nu)
+    return sums
+
+
+def _tail_block(left: np.ndarray, rows: np.ndarray, start: int, ends: np.ndarray, scales: np.ndarray, nu: float) -> np.ndarray:
+    """`_tail_sums` for owners of one sign, sorted by end: `2 x k`."""
+    stop, shared = int(ends[-1]), int(ends[0])
+    one_row = rows[0] == rows[-1] and np.all(rows == rows[0])
+    values = left[rows[0], start:stop] if one_row else left[rows, start:stop]  # (k x) samples
+    past = np.arange(shared, stop) >= ends[:, None]  # k x (stop - shared)
+    magnitudes = np.abs(scales)[:, None]
+    if nu > _FACTORED_NU_MAX or not np.all(np.isfinite((1 + nu) / magnitudes)):
+        values = np.array(np.broadcast_to(values, (ends.size, stop - start)))
+        values[:, shared - start :][past] = np.inf
+        return _terms(values, scales[:, None], nu).sum(axis=-1)
+
+    def exponentials(rate: float) -> np.ndarray:
+        """exp(-rate v / |m|), 0 past each owner's end: exp(-rate x) up to a constant."""
+        exponent = np.multiply.outer(-rate / magnitudes[:, 0], values) if one_row else values * (-rate / magnitudes)
+        np.copyto(exponent[:, shared - start :], -np.inf, where=past)
+        return np.exp(exponent, out=exponent)
+
+    ones = np.ones(stop - start)
+    weights = exponentials(nu)
+    totals = weights @ ones
+    if scales[0] < 0:  # -nu x = -nu v / |m| - nu
+        numerators = np.square(weights, out=weights) @ ones if nu == 1 else exponentials(1 + nu) @ ones
+        return np.stack([totals * np.exp(-nu), numerators * np.exp(-(1 + nu))])
+    finite = np.where(np.isfinite(values), values, 0.0)  # -nu x = -nu v / m + nu
+    numerators = weights @ finite if one_row else np.einsum("ij,ij->i", weights, finite)
+    return np.stack([totals, numerators]) * np.exp(nu)
+
+
+def _blocks(sizes: np.ndarray, budget: int) -> list[slice]:
+    """Consecutive slices of `sizes` (non-decreasing) whose length times largest size stays
+    within `budget` (at least one element a slice)."""
+    blocks, begin = [], 0
+    while begin < sizes.size:
+        most = max(1, budget // max(1, int(sizes[begin])))
+        candidates = sizes[begin : begin + most]
+        fits = np.arange(1, candidates.size + 1) * np.maximum(candidates, 1) <= budget
+        taken = candidates.size if fits.all() else max(1, int(np.argmin(fits)))
+        blocks.append(slice(begin, begin + taken))
+        begin += taken
+    return blocks
 
 
 def _pad(values: np.ndarray, length: int, fill: float) -> np.ndarray:

@@ -1,0 +1,209 @@
+"""Until under the new robustness: the owner-sharing kernel of `_numerics.until_windows` against
+the straightforward one it replaced (a `width x width` operand matrix per output), kept here as
+`reference_until`."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.lib.stride_tricks import sliding_window_view
+
+from stl_lfd.signals import read_signal_csv
+from stl_lfd.stl import _numerics, compile_spec, parse
+from stl_lfd.stl import robustness as robustness_module
+from stl_lfd.stl._numerics import _pad, classic_conjunction, new_conjunction, new_disjunction, until_windows
+from tests.conftest import ROOT
+
+pytestmark = [pytest.mark.filterwarnings("ignore::stl_lfd.stl.robustness.HorizonWarning"), pytest.mark.filterwarnings("error::RuntimeWarning")]
+
+TOLERANCE = 1e-9
+NUS = (0.5, 1.0, 2.0, 5.0)
+
+
+# --- The reference: O(count x width^2) -----------------------------------------------------
+
+
+def reference_until(left: np.ndarray, right: np.ndarray, lo: int, width: int, count: int, nu: float) -> np.ndarray:
+    """`left U[lo, width-1] right` under the new robustness, as `until_windows` computed it
+    before: for each output, the new conjunction of every row of the `width x width` operand
+    matrix (row j: left[i .. i+j-1], right[i+j], then +inf), then the new disjunction over j >= lo.
+
+    Args:
+        left, right: `... x n` arrays.
+
+    Returns:
+        `... x count` array.
+    """
+    length = count + width - 1
+    left_windows = sliding_window_view(_pad(left, length, np.inf), width, axis=-1)
+    right_windows = sliding_window_view(_pad(right, length, -np.inf), width, axis=-1)
+    batch = int(np.prod(left.shape[:-1], dtype=int))
+    step = max(1, _numerics._CHUNK_ELEMENTS // max(1, batch * width * width))
+    parts = []
+    for begin in range(0, count, step):
+        chunk = slice(begin, min(begin + step, count))
+        lefts, rights = left_windows[..., chunk, :], right_windows[..., chunk, :]  # ... x c x width
+        rows = np.arange(width)[:, None]
+        columns = np.arange(width)[None, :]
+        operands = np.where(columns < rows, lefts[..., None, :], np.inf)
+        diagonal = np.broadcast_to(rights[..., :, None], operands.shape[:-1] + (1,))
+        np.copyto(operands, np.broadcast_to(diagonal, operands.shape), where=columns == rows)
+        candidates = new_conjunction(operands, nu)  # ... x c x width
+        candidates[..., :lo] = -np.inf
+        parts.append(new_disjunction(candidates, nu))
+    return np.concatenate(parts, axis=-1)
+
+
+def difference(actual: np.ndarray, expected: np.ndarray) -> float:
+    """Largest difference, absolute below 1 and relative above; inf if infinities or NaNs differ."""
+    if np.isnan(actual).any() or not np.array_equal(np.isinf(actual), np.isinf(expected)):
+        return np.inf
+    if not np.array_equal(actual[np.isinf(actual)], expected[np.isinf(expected)]):
+        return np.inf
+    finite = np.isfinite(expected)
+    if not finite.any():
+        return 0.0
+    return float(np.max(np.abs(actual[finite] - expected[finite]) / np.maximum(1.0, np.abs(expected[finite]))))
+
+
+def operands(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
+    """Random robustness values: mixed, all positive or all negative signs, rounded (zeros and
+    ties), smooth or flat in stretches, at a random scale, with some +inf and -inf."""
+    values = rng.normal(size=shape) * rng.choice([1e-3, 1.0, 1e3])
+    kind = rng.integers(6)
+    if kind == 1:
+        values = np.abs(values)
+    elif kind == 2:
+        values = -np.abs(values)
+    elif kind == 3:
+        values = np.round(values)
+    elif kind == 4:  # a smooth signal, as a trajectory gives
+        values = np.cumsum(values, axis=-1) / 4
+    elif kind == 5:  # flat stretches, as a held pose gives
+        values = np.take(values, np.sort(rng.integers(0, shape[-1], shape[-1])), axis=-1)
+    draw = rng.random(shape)
+    values[draw < rng.choice([0.0, 0.05])] = np.inf
+    values[draw > 1 - rng.choice([0.0, 0.03])] = -np.inf
+    return values
+
+
+def random_case(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, int, int, int, float]:
+    batch = (int(rng.integers(1, 4)),) if rng.random() < 0.4 else ()
+    samples = int(rng.integers(1, 30))
+    left, right = operands(rng, batch + (samples,)), operands(rng, batch + (samples,))
+    width = int(rng.integers(1, samples + 3))
+    lo = int(rng.integers(0, width))
+    count = int(rng.integers(1, samples + 1))
+    return left, right, lo, width, count, float(rng.choice(NUS))
+
+
+# --- Equality with the reference ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_random_operands_match_the_reference(seed):
+    """1,200 cases: bounded and unbounded windows, lo > 0, batches, infinities, zeros, signs."""
+    rng = np.random.default_rng(seed)
+    for _ in range(120):
+        left, right, lo, width, count, nu = random_case(rng)
+        with np.errstate(all="ignore"):
+            expected = reference_until(left, right, lo, width, count, nu)
+        actual = until_windows(left, right, lo, width, count, new_conjunction, nu)
+        assert actual.shape == expected.shape
+        assert difference(actual, expected) <= TOLERANCE, (left, right, lo, width, count, nu, actual, expected)
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-308, 1e300, 1e150])
+@pytest.mark.parametrize("nu", [1.0, 3.0, 40.0, 500.0])
+def test_extreme_magnitudes_and_sharpness(scale, nu):
+    """Minima near the limits of floating point, and nu beyond the factored exponentials."""
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        left, right = rng.normal(size=(2, 16)) * scale
+        for count in (1, 4, 16):  # outputs near the start sum the rest of the window as totals
+            with np.errstate(all="ignore"):
+                expected = reference_until(left, right, 0, 13, count, nu)
+            actual = until_windows(left, right, 0, 13, count, new_conjunction, nu)
+            assert difference(actual / scale, expected / scale) <= TOLERANCE
+
+
+def test_chunked_outputs_match(monkeypatch):
+    """Outputs are computed in chunks; a tiny chunk size gives the same values."""
+    rng = np.random.default_rng(3)
+    left, right = rng.normal(size=(2, 2, 40))
+    expected = until_windows(left, right, 2, 30, 40, new_conjunction, 1.0)
+    monkeypatch.setattr(_numerics, "_CHUNK_ELEMENTS", 50)
+    monkeypatch.setattr(_numerics, "_BLOCK_ELEMENTS", 7)
+    assert difference(until_windows(left, right, 2, 30, 40, new_conjunction, 1.0), expected) <= 1e-12
+
+
+def test_special_operands():
+    """+inf operands drop out, -inf ones make a candidate -inf, a zero minimum gives 0."""
+    nu = 1.0
+    cases = [
+        ([np.inf, np.inf], [np.inf, np.inf]),
+        ([np.inf, 1.0], [-1.0, np.inf]),
+        ([-np.inf, 2.0, 3.0], [1.0, 1.0, 1.0]),
+        ([0.0, 1.0, 2.0], [3.0, -1.0, 2.0]),
+        ([1.0, 2.0, 3.0], [-np.inf, -np.inf, -np.inf]),
+        ([-1.0, -2.0, -3.0], [0.0, 5.0, -5.0]),
+    ]
+    for left, right in cases:
+        left, right = np.array(left), np.array(right)
+        for lo in range(left.size):
+            expected = reference_until(left, right, lo, left.size, left.size, nu)
+            actual = until_windows(left, right, lo, left.size, left.size, new_conjunction, nu)
+            assert difference(actual, expected) <= TOLERANCE, (left, right, lo, actual, expected)
+
+
+def test_classic_is_unchanged():
+    left, right = np.random.default_rng(0).normal(size=(2, 20))
+    actual = until_windows(left, right, 1, 5, 20, classic_conjunction, 1.0)
+    expected = [max(min([right[i + j]] + list(left[i : i + j])) for j in range(1, 5) if i + j < 20) if i + 1 < 20 else -np.inf for i in range(20)]
+    assert np.array_equal(actual, expected)
+
+
+# --- Inside formulas ------------------------------------------------------------------------
+
+NESTED = [
+    "x > 0.1 U y > 0",
+    "x > 0 U[0.2, 0.6] y > 0.2",
+    "G[0, 0.5] (x > -0.2 U[0, 0.4] y > 0)",
+    "F[0.1, 0.7] (x > 0 U y > 0.3)",
+    "(x > 0 U[0, 0.3] y > 0) U z > 0.1",
+    "x > 0 U (y > 0 U[0.1, 0.5] z > 0)",
+    "G[0, 0.3] x > -0.5 U (F[0.2, 0.4] y > 0 & z > -1)",
+    "!(x > 0 U[0.3, 0.9] y > 0) | G[0.2, 0.5] z > 0",
+]
+
+
+def reference_evaluator(left, right, lo, width, count, conjunction, nu):
+    if conjunction is classic_conjunction:
+        return until_windows(left, right, lo, width, count, conjunction, nu)
+    with np.errstate(all="ignore"):
+        return reference_until(left, right, lo, width, count, nu)
+
+
+@pytest.mark.parametrize("text", NESTED)
+@pytest.mark.parametrize("nu", NUS)
+def test_nested_formulas_match_the_reference(text, nu, monkeypatch):
+    """Until inside G/F windows and other untils, batched `B x T` signals, every sample."""
+    rng = np.random.default_rng(len(text))
+    times = np.arange(24) / 20
+    signals = {name: np.cumsum(rng.normal(0, 0.2, size=(3, times.size)), axis=-1) for name in "xyz"}
+    compiled = compile_spec(parse(text), "new", nu)
+    actual = compiled.trace(signals, times)
+    monkeypatch.setattr(robustness_module, "until_windows", reference_evaluator)
+    expected = compile_spec(parse(text), "new", nu).trace(signals, times)
+    assert difference(actual, expected) <= TOLERANCE
+
+
+def test_a_long_trace_matches_the_reference():
+    """2,200 samples (22 s at 100 Hz): the top-level value of an unbounded and a bounded until."""
+    table = read_signal_csv(ROOT / "examples" / "three_regions.csv")
+    times = np.arange(2200) / 100
+    x, y, z = (np.interp(times, table.times, table.columns[name]) for name in "xyz")
+    for left, right in ((x - 0.4, y - 0.15), (z - 0.39, x - 0.5)):  # z is constant: a flat left
+        for lo, width, count in ((0, 2200, 1), (100, 400, 1), (0, 300, 40)):
+            expected = reference_until(left, right, lo, width, count, 1.0)
+            assert difference(until_windows(left, right, lo, width, count, new_conjunction, 1.0), expected) <= TOLERANCE
