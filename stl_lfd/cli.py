@@ -675,12 +675,16 @@ def report(
         [], "--gp-parameter", help="Parameter for the GP slice figure, e.g. 'mean[3].x' (repeatable; default: the two most relevant)."
     ),
 ) -> None:
-    """Write the figures of an optimisation run (PNG) and an index.html that shows them.
+    """Write the figures of an optimisation run (PNG) and an index.html that explains them.
 
-    Figures: end-effector paths, signed distance to each region in its time window,
-    robustness per trial, GP slices, transition graphs before/after, duration means per
-    trial, and contact forces (when recorded). The paths of the files go to stdout. For a
-    folder of 'stlopt sweep': its table (stdout) and sweep.png, redrawn from its runs.
+    index.html: the verdict, the task (spec, what was optimised, method and budget), the
+    commands to replay or continue, and each figure with its caption. Figures, where the run
+    has the data: trajectories.png (paths from above and from the side), region_distances.png,
+    robustness.png, components.png (each part of the spec and what they compose to),
+    gp_slices.png, transitions.png (when transitions are optimised), durations.png, forces.png
+    (when something was touched), tilt.png (when the hand turned), compare.png (--compare).
+    The paths of the files go to stdout. For a folder of 'stlopt sweep': its table (stdout) and
+    sweep.png, redrawn from its runs.
 
     Example:
 

@@ -36,8 +36,7 @@ class TrialPrinter:
             f"{task.backend} backend -> {prepared.run.path}"
         )
         self.console.print(f"unoptimised skill: robustness {initial:+.5f} ({_verdict(initial > 0)})")
-        design = "chosen on their plans" if optimizer.method == "plan" else "Sobol"
-        plan = f"{optimizer.trials} trials: {optimizer.initial} {design}, then {optimizer.method}"
+        plan = optimizer.phases
         if done >= optimizer.trials:
             self.console.print(plan + f"; the run is complete ({done} trials; raise --iterations to extend it)")
             return

@@ -39,6 +39,9 @@ def test_the_api_page_python_examples_run(monkeypatch, capsys):
     assert namespace["insert"].frame_names_ == ["base", "shaft", "holder"]
     end = namespace["holder"].from_base(namespace["moved"].positions[-1:])[0]
     assert abs(end[0] - 0.008) < 0.004 and abs(end[1]) < 0.004  # the demonstrated stop, carried to the moved holder
+    for block in blocks:  # every `# prints X` comment is what its line prints
+        for shown in re.findall(r"# prints (.+)", block):
+            assert shown.strip() in printed, f"docs/api.md says it prints {shown.strip()!r}; it printed {printed}"
 
 
 def test_import_stl_lfd_is_lazy():

@@ -155,11 +155,14 @@ def scratch(tmp_path_factory):
     def folder_of(page: str) -> Path:
         if page not in _scratch:
             folder = tmp_path_factory.mktemp(Path(page).stem)
-            for name in ("specs", "examples", "demos", "configs"):
+            for name in ("specs", "examples", "demos"):
                 (folder / name).symlink_to(ROOT / name)
-            (folder / "sweeps").mkdir()  # sweep files only: a sweep's output must not land in the repository
-            for path in (ROOT / "sweeps").glob("*.yaml"):
-                (folder / "sweeps" / path.name).symlink_to(path)
+            # folders of links: what an example writes there (a sweep's output, an edited task file)
+            # must not land in the repository
+            for name in ("configs", "sweeps"):
+                (folder / name).mkdir()
+                for path in (ROOT / name).iterdir():
+                    (folder / name / path.name).symlink_to(path)
             for name, text in FILES[page].items():
                 (folder / name).write_text(text)
             _scratch[page] = folder

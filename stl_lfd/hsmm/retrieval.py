@@ -58,7 +58,8 @@ def retrieve(
 
     Args:
         model: a fitted (possibly modified) HSMM or TP-HSMM.
-        duration: seconds to retrieve (default: the model's expected duration).
+        duration: seconds to retrieve (default: the model's expected duration, to the nearest
+            multiple of its sample period).
         rate: samples per second of the result (default: the model's own rate).
         control_cost: weight r of the acceleration cost R = r I.
         poses: for a TP-HSMM, the pose of every frame but `base` (see `TPHSMM.at`).
@@ -73,7 +74,9 @@ def retrieve(
     if isinstance(model, TPHSMM):
         model = model.at(poses or {})
     dt = model.sample_period_
-    duration = model.expected_duration() if duration is None else float(duration)
+    # By default the expected duration on the model's own time grid, so that the skill lasts as
+    # long at every rate (retrieved at the model's rate, or executed at the simulation's).
+    duration = dt * round(model.expected_duration() / dt) if duration is None else float(duration)
     problem = samples_problem(duration, 1.0 / dt) or (samples_problem(duration, float(rate)) if rate is not None else "")
     if problem:
         raise ModelError(f"cannot retrieve the skill: {problem}")

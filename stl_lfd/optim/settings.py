@@ -96,6 +96,17 @@ class Optimizer:
     xi: float = 0.1
     workers: int = 1
 
+    @property
+    def initial_choice(self) -> str:
+        """How the initial trials are chosen: `chosen on their plans` (method plan) or `Sobol`."""
+        return "chosen on their plans" if self.method == "plan" else "Sobol"
+
+    @property
+    def phases(self) -> str:
+        """The budget and its phases as `stlopt optimize` and the report name them:
+        `32 trials: 8 chosen on their plans, then plan`."""
+        return f"{self.trials} trials: {self.initial} {self.initial_choice}, then {self.method}"
+
     def __post_init__(self) -> None:
         """Refuse settings that make no sense, from a task file, the command line or Python."""
         from stl_lfd.optim.methods import method_class, method_names

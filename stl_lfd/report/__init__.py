@@ -1,5 +1,5 @@
-"""Figures. Functions take arrays or a loaded run and return matplotlib Figures; `write_report`
-saves a run's figures and an index.html."""
+"""Reports. `write_report` saves a run's figures (`figures`: a loaded run in, matplotlib Figures
+out) and an index.html that explains them (`html`, with its words from `explain`)."""
 
 from __future__ import annotations
 
@@ -31,25 +31,25 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
             raise ConfigError(f"--gp-parameter {unknown[0]} is not a parameter of the run ({', '.join(run.space.names)})")
     out.mkdir(parents=True, exist_ok=True)
     made = [
-        ("trajectories", "End-effector paths of all trials (x-y), the best in red", figures.trajectories(run)),
-        ("region_distances", "Signed distance to each region of the spec within its time window", figures.region_distances(run)),
-        ("robustness", "Robustness per trial and best so far", figures.robustness_per_trial(run)),
-        ("components", "Robustness of each part of the spec, or at each object placement, per trial (the lowest binds)", figures.component_robustness(run)),
-        ("gp_slices", "GP surrogate through the best point", figures.gp_slices(run, gp_parameters)),
-        ("transitions", "Transition graph before and after optimisation", figures.transition_graphs(run)),
-        ("durations", "Duration means per state per trial", figures.durations_per_trial(run)),
-        ("forces", "Contact force per trial", figures.contact_forces(run)),
-        ("tilt", "The hand's tilt (angle between its approach axis and straight down) per trial", figures.tilt(run)),
+        ("trajectories", figures.trajectories(run)),
+        ("region_distances", figures.region_distances(run)),
+        ("robustness", figures.robustness_per_trial(run)),
+        ("components", figures.component_robustness(run)),
+        ("gp_slices", figures.gp_slices(run, gp_parameters)),
+        ("transitions", figures.transition_graphs(run) if run.transitions_optimised else None),
+        ("durations", figures.durations_per_trial(run)),
+        ("forces", figures.contact_forces(run)),
+        ("tilt", figures.tilt(run)),
     ]
     if compare:
-        runs = [run] + others
-        made.append(("compare", "Best so far: " + " vs ".join(str(r.path.name) for r in runs), figures.compare_runs(runs)))
+        made.append(("compare", figures.compare_runs([run] + others)))
     written = []
-    for name, title, figure in made:
+    for name, figure in made:
         if figure is None:
+            (out / f"{name}.png").unlink(missing_ok=True)  # an earlier report's, no longer true
             continue
         path = out / f"{name}.png"
         with atomic_output(path) as temporary:
             figure.savefig(temporary, dpi=100)
-        written.append((title, path))
+        written.append((name, path))
     return write_index(run, written, out), [path for _, path in written]

@@ -24,29 +24,80 @@ def _trial_colors(count: int) -> list[tuple]:
     return [to_rgba("tab:blue", alpha=0.15 + 0.6 * index / max(count - 1, 1)) for index in range(count)]
 
 
+VIEWS = (("x", "y"), ("x", "z"), ("y", "z"))  # from above, then from the side
+
+
 def trajectories(run: RunData) -> Figure:
-    """End-effector paths of every trial on the x-y plane; best in red; regions as patches."""
-    figure = Figure(figsize=(6.5, 6), layout="constrained")
-    axes = figure.subplots()
-    for index, (name, box) in enumerate(run.regions.items()):
-        if "x" in box and "y" in box:
-            (x0, x1), (y0, y1) = box["x"], box["y"]
-            color = REGION_COLORS[index % len(REGION_COLORS)]
-            axes.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, color=color, alpha=0.25, lw=0))
-            axes.text((x0 + x1) / 2, (y0 + y1) / 2, name, ha="center", va="center", fontsize=11, color=color, weight="bold")
-    numbers = [trial.trial for trial in run.trials if trial.trial in run.signals]
-    for color, number in zip(_trial_colors(len(numbers)), numbers):
-        table = run.signals[number]
-        axes.plot(table.columns["x"], table.columns["y"], color=color, lw=1)
-    if 0 in run.signals:
-        axes.plot(run.signals[0].columns["x"], run.signals[0].columns["y"], color=INITIAL, lw=1.5, ls="--", label="unoptimised")
-    if run.best is not None and run.best.trial in run.signals:
-        best = run.signals[run.best.trial]
-        axes.plot(best.columns["x"], best.columns["y"], color=BEST, lw=2.2, label=f"best (trial {run.best.trial})")
-        _approach_axes(axes, best)
-    axes.set(xlabel="x (m)", ylabel="y (m)", title=f"{run.task.name}: end-effector paths of {len(numbers)} trials", aspect="equal")
-    axes.legend(loc="best")
+    """End-effector paths of every trial from above (x-y, true to scale) and from the side (x-z,
+    y-z); the unoptimised skill dashed, the best in red, starts as circles and ends as squares;
+    the spec's regions as labelled boxes."""
+    tables = {number: table for number, table in run.signals.items() if {"x", "y", "z"} <= set(table.columns)}
+    limits = {axis: _limits(run, tables, axis) for axis in "xyz"}
+    top_width = float(np.clip(7.0 * np.ptp(limits["x"]) / np.ptp(limits["y"]), 3.0, 8.0))
+    figure = Figure(figsize=(top_width + 6.5, 7.5), layout="constrained")
+    grid = figure.add_gridspec(2, 2, width_ratios=[top_width, 6.0])
+    panels = [figure.add_subplot(grid[:, 0]), figure.add_subplot(grid[0, 1]), figure.add_subplot(grid[1, 1])]
+    numbers = [trial.trial for trial in run.trials if trial.trial in tables]
+    best = run.best.trial if run.best is not None and run.best.trial in tables else None
+    for axes, (across, up) in zip(panels, VIEWS):
+        _region_boxes(axes, run, across, up)
+        for color, number in zip(_trial_colors(len(numbers)), numbers):
+            axes.plot(tables[number].columns[across], tables[number].columns[up], color=color, lw=1)
+        if 0 in tables:
+            _path_with_ends(axes, tables[0], across, up, INITIAL, 1.5, "--", "unoptimised")
+        if best is not None:
+            _path_with_ends(axes, tables[best], across, up, BEST, 2.2, "-", f"best (trial {best})")
+        axes.set(xlim=limits[across], ylim=limits[up], xlabel=f"{across} (m)", ylabel=f"{up} (m)")
+    panels[0].set(aspect="equal", title="from above (x-y, to scale)")
+    panels[1].set_title("from the side (x-z)")
+    panels[2].set_title("from the side (y-z)")
+    if best is not None:
+        _approach_axes(panels[0], tables[best])
+    handles = [*panels[0].get_legend_handles_labels()[0], *_end_markers()]
+    figure.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize="small")
+    figure.suptitle(f"{run.task.name}: end-effector paths of {len(numbers)} trials")
     return figure
+
+
+def _limits(run: RunData, tables: dict, axis: str, margin: float = 0.06) -> tuple[float, float]:
+    """The range of `axis` that holds every path and every region, with a margin."""
+    values = [value for table in tables.values() for value in (np.min(table.columns[axis]), np.max(table.columns[axis]))]
+    values += [bound for box in run.regions.values() if axis in box for bound in box[axis]]
+    low, high = (min(values), max(values)) if values else (0.0, 1.0)
+    pad = max(high - low, 0.02) * margin
+    return low - pad, high + pad
+
+
+def _region_boxes(axes, run: RunData, across: str, up: str) -> None:
+    """The spec's regions that bound both coordinates of a view, as boxes with their names on
+    top (one label for boxes that coincide in the view), drawn over the paths so that they can
+    be read."""
+    names_at: dict[tuple, list[str]] = {}
+    colors: dict[tuple, str] = {}
+    for index, (name, box) in enumerate(run.regions.items()):
+        if across in box and up in box:
+            corners = (*box[across], *box[up])
+            names_at.setdefault(corners, []).append(name)
+            colors.setdefault(corners, REGION_COLORS[index % len(REGION_COLORS)])
+    for (x0, x1, y0, y1), names in names_at.items():
+        color = colors[(x0, x1, y0, y1)]
+        axes.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, facecolor=color, alpha=0.2, edgecolor="none"))
+        axes.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor=color, lw=1))
+        label = {"facecolor": "white", "alpha": 0.8, "edgecolor": "none", "pad": 1}
+        axes.text(x0, y1, f"{', '.join(names)}", ha="left", va="bottom", fontsize=10, color=color, weight="bold", zorder=6, bbox=label)
+
+
+def _path_with_ends(axes, table, across: str, up: str, color, width: float, style: str, label: str) -> None:
+    x, y = table.columns[across], table.columns[up]
+    axes.plot(x, y, color=color, lw=width, ls=style, label=label, zorder=4)
+    axes.plot(x[:1], y[:1], marker="o", ms=8, color=color, mec="white", ls="none", zorder=5)
+    axes.plot(x[-1:], y[-1:], marker="s", ms=8, color=color, mec="white", ls="none", zorder=5)
+
+
+def _end_markers() -> list:
+    from matplotlib.lines import Line2D
+
+    return [Line2D([], [], marker="o", color="0.3", ls="none", label="start"), Line2D([], [], marker="s", color="0.3", ls="none", label="end")]
 
 
 def _approach_axes(axes, table, count: int = 12, length: float = 0.03) -> None:
@@ -133,19 +184,23 @@ def component_robustness(run: RunData) -> Figure | None:
     if not trials:
         return None
     names = list(trials[0].components)
-    figure = Figure(figsize=(7.5, 4), layout="constrained")
+    figure = Figure(figsize=(10, 4.2), layout="constrained")
     axes = figure.subplots()
     numbers = np.array([trial.trial for trial in trials])
     for index, name in enumerate(names):
         values = np.array([trial.components.get(name, np.nan) for trial in trials], dtype=float)
-        axes.plot(numbers, values, marker="o", ms=3, lw=1, color=f"C{index}", label=name)
-    axes.plot(numbers, [trial.robustness for trial in trials], color="k", lw=2, label="spec (composed)")
-    binding = np.array([min(trial.components.values()) for trial in trials])
-    axes.scatter(numbers, binding, s=60, facecolors="none", edgecolors="k", zorder=3, label="binding part")
+        axes.plot(numbers, values, marker="o", ms=3, lw=1, color=f"C{index % 10}", label=name)
+    axes.plot(numbers, [trial.robustness for trial in trials], color="k", lw=2, label=f"spec ({COMPOSED[run.task.semantics]})")
+    lowest = np.array([min(trial.components.values()) for trial in trials])
+    axes.scatter(numbers, lowest, s=60, facecolors="none", edgecolors="k", zorder=3, label="lowest part")
     axes.axhline(0.0, color="k", lw=0.8, ls=":")
     axes.set(xlabel="trial", ylabel=f"{run.task.semantics} robustness", title=f"{run.task.name}: robustness of each part of the spec")
-    axes.legend(loc="lower right", fontsize="small")
+    figure.legend(loc="outside right upper", fontsize="small")
     return figure
+
+
+# How the spec's value is composed of its parts, as the components figure's legend says it.
+COMPOSED = {"classic": "the minimum of the parts", "new": "the parts' new conjunction"}
 
 
 def _robustness_curves(axes, run: RunData, label_prefix: str, color: str = "tab:blue") -> None:
@@ -159,7 +214,7 @@ def _robustness_curves(axes, run: RunData, label_prefix: str, color: str = "tab:
             values[initial],
             marker="s",
             color="0.5",
-            label="initial (Sobol)" if run.task.optimizer.method != "plan" else "initial (design)",
+            label=f"initial ({run.task.optimizer.initial_choice})",
             zorder=3,
         )
         axes.scatter(numbers[~initial], values[~initial], marker="o", color=color, label=f"{run.task.optimizer.method} trials", zorder=3)

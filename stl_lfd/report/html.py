@@ -1,4 +1,5 @@
-"""The `index.html` of a report: the run's summary table and its figures."""
+"""The `index.html` of a report: the task and its result in words, the commands that go on from
+here, and the figures with their captions (the words come from `stl_lfd.report.explain`)."""
 
 from __future__ import annotations
 
@@ -6,50 +7,55 @@ import html
 from pathlib import Path
 
 from stl_lfd.files import write_atomically
+from stl_lfd.report import explain
 from stl_lfd.report.run_data import RunData
 
-
-def summary_rows(run: RunData) -> list[tuple[str, str]]:
-    summary, task = run.summary, run.task
-
-    def number(value) -> str:
-        return f"{value:+.5f}" if isinstance(value, (int, float)) else "–"
-
-    return [
-        ("run", str(run.path)),
-        ("spec", f"{task.spec.name}"),
-        ("semantics", task.semantics + (f" (nu = {task.nu:g})" if task.semantics == "new" else "")),
-        ("backend / scene", f"{task.backend} / {task.scene}"),
-        ("parameters", f"{run.space.dimension}: {', '.join(run.space.names)}"),
-        ("optimiser", f"{task.optimizer.method}, {task.optimizer.initial} Sobol of {task.optimizer.trials} trials, seed {task.optimizer.seed}"),
-        ("trials", f"{summary.trials} finished, {summary.failed_trials} failed"),
-        ("unoptimised robustness", number(summary.initial_robustness)),
-        ("best robustness", f"{number(summary.best_robustness)} (trial {summary.best_trial})"),
-        ("satisfied", "yes" if summary.satisfied else "no"),
-        ("first satisfied at trial", str(summary.first_satisfied_trial or "–")),
-        ("wall time", f"{summary.wall_seconds:.1f} s"),
-    ]
+STYLE = """body{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;line-height:1.4}
+table{border-collapse:collapse} th,td{text-align:left;vertical-align:top;padding:3px 10px;border-bottom:1px solid #ddd}
+pre{background:#f6f6f6;padding:.6em 1em;overflow-x:auto} img{max-width:100%} figure{margin:2em 0}
+figcaption{color:#444;max-width:60em} .verdict{font-size:1.15em} code{background:#f6f6f6}"""
 
 
 def write_index(run: RunData, figures: list[tuple[str, Path]], out: Path) -> Path:
-    """Write `out/index.html` showing the summary and the figures (paths relative to `out`)."""
-    rows = "\n".join(f"<tr><th>{html.escape(key)}</th><td>{html.escape(value)}</td></tr>" for key, value in summary_rows(run))
+    """Write `out/index.html` for `run` showing `figures` (`(name, path)`, paths relative to `out`)."""
+    write_atomically(out / "index.html", index_page(run, figures))
+    return out / "index.html"
+
+
+def index_page(run: RunData, figures: list[tuple[str, Path]]) -> str:
+    escape = html.escape
+    task_rows = "\n".join(f"<tr><th>{escape(key)}</th><td>{escape(value)}</td></tr>" for key, value in explain.task_rows(run))
+    commands = "\n".join(f"<tr><td><code>{escape(command)}</code></td><td>{escape(what)}</td></tr>" for command, what in explain.commands(run))
     images = "\n".join(
-        f'<figure><img src="{html.escape(path.name)}" alt="{html.escape(title)}"><figcaption>{html.escape(title)}</figcaption></figure>'
-        for title, path in figures
+        f'<figure id="{escape(name)}"><img src="{escape(path.name)}" alt="{escape(name)}">'
+        f"<figcaption><b>{escape(path.name)}</b>: {escape(explain.caption(name, run))}</figcaption></figure>"
+        for name, path in figures
     )
-    page = f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>stlopt report: {html.escape(run.task.name)}</title>
-<style>body{{font-family:sans-serif;max-width:1200px;margin:2em auto;}} table{{border-collapse:collapse;}}
-th,td{{text-align:left;padding:3px 10px;border-bottom:1px solid #ddd;}} img{{max-width:100%;}}
-figure{{margin:2em 0;}} figcaption{{color:#555;}}</style></head>
-<body><h1>{html.escape(run.task.name)}</h1>
+    left_out = explain.left_out(run, {name for name, _ in figures})
+    left_out_items = "\n".join(f"<li><b>{escape(name)}</b>: {escape(why)}</li>" for name, why in left_out)
+    left_out_section = f"<p>Not drawn for this run:</p><ul>\n{left_out_items}\n</ul>" if left_out else ""
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>stlopt report: {escape(run.task.name)}</title>
+<style>{STYLE}</style></head>
+<body><h1>{escape(run.task.name)}</h1>
+<p class="verdict">{escape(explain.verdict(run))}</p>
+<h2>The task</h2>
+<p>Find parameters of the skill whose execution satisfies the spec {escape(run.task.spec.name)}, as robustly as possible:</p>
+<pre>{escape(_spec_text(run))}</pre>
 <table>
-{rows}
+{task_rows}
 </table>
+<h2>Going on from here</h2>
+<table>
+{commands}
+</table>
+<h2>Figures</h2>
 {images}
+{left_out_section}
 </body></html>
 """
-    path = out / "index.html"
-    write_atomically(path, page)
-    return path
+
+
+def _spec_text(run: RunData) -> str:
+    """The spec file as written, with its comments (`load_run` has read it already)."""
+    return Path(run.task.spec).read_text().strip()

@@ -1,5 +1,9 @@
 """`stlopt report` on a small kinematic run: every figure written, valid, not blank, linked."""
 
+import dataclasses
+import html
+import re
+
 import numpy as np
 import pytest
 from PIL import Image
@@ -7,6 +11,8 @@ from typer.testing import CliRunner
 
 from stl_lfd.cli import app
 from stl_lfd.optim import finish_run, load_task, start_run
+from stl_lfd.report import explain
+from stl_lfd.report.run_data import load_run
 from stl_lfd.signals import read_signal_csv, write_signal_csv
 from tests.conftest import ROOT
 
@@ -35,6 +41,11 @@ def assert_picture(path):
     assert pixels.std() > 5  # not a blank canvas
 
 
+def page_text(path):
+    """What a reader of the page sees: its text without tags."""
+    return html.unescape(re.sub(r"<[^>]+>", "", path.read_text()))
+
+
 @pytest.mark.slow
 def test_report_writes_every_figure_and_an_index(run_dir, tmp_path):
     out = tmp_path / "report"
@@ -45,10 +56,16 @@ def test_report_writes_every_figure_and_an_index(run_dir, tmp_path):
     for name in FIGURES:
         assert str(out / f"{name}.png") in listed
         assert_picture(out / f"{name}.png")
-    page = (out / "index.html").read_text()
     for name in FIGURES:
-        assert f'src="{name}.png"' in page
-    assert "best robustness" in page and "phi2.stl" in page
+        assert f'src="{name}.png"' in (out / "index.html").read_text()
+    page = page_text(out / "index.html")
+    summary = load_run(run_dir).summary
+    assert f"the best trial ({summary.best_trial} of 6) scores {summary.best_robustness:+.5f} (new robustness (nu = 1))" in page
+    assert f"the unoptimised skill scored {summary.initial_robustness:+.5f}" in page
+    assert "phi2 := " in page  # the spec as written
+    assert "6 trials: 3 chosen on their plans, then plan" in page  # as stlopt optimize names the phases
+    assert "the means of state 3 (x, y, z), within ±2 standard deviations" in page and "the transition band" in page
+    assert f"stlopt replay {run_dir.resolve()} --trial {summary.best_trial}" in page
     assert not (out / "forces.png").exists()  # the kinematic backend touches nothing
     assert not (out / "tilt.png").exists()  # a skill without orientation points the hand down throughout
 
@@ -89,8 +106,31 @@ def test_report_of_a_behaviour_run_draws_each_skill(tmp_path):
     assert result.exit_code == 0, result.stderr
     for name in FIGURES:
         assert_picture(tmp_path / "report" / f"{name}.png")
-    page = (tmp_path / "report" / "index.html").read_text()
+    page = page_text(tmp_path / "report" / "index.html")
     assert "pick.duration[1]" in page and "insert.mean[5+6].holder.x" in page
+    assert "pick: the duration means of" in page and "insert: the means of" in page
+
+
+@pytest.mark.slow
+def test_captions_follow_the_semantics_and_unused_figures_say_why(tmp_path, learned_model_file):
+    task = tmp_path / "task.yaml"
+    task.write_text(
+        f"name: plain\nspec: {ROOT / 'specs' / 'phi1.stl'}\nmodel: {learned_model_file}\nbackend: kinematic\nduration: 22\nrate: 20\n"
+        "semantics: classic\nparameters:\n  durations: {components: [2, 4]}\noptimizer: {method: random, initial: 2, trials: 3, seed: 1}\n"
+    )
+    finish_run(start_run(load_task(task), tmp_path / "run"))
+    result = runner.invoke(app, ["report", str(tmp_path / "run")])
+    assert result.exit_code == 0, result.stderr
+    report = tmp_path / "run" / "report"
+    assert not (report / "transitions.png").exists()
+    page = page_text(report / "index.html")
+    assert "transitions.png: the transitions were not optimised, so the graph is the same before and after" in page
+    assert "3 trials: 2 Sobol, then random" in page and "classic robustness" in page
+    assert "which is their minimum, so the lowest part (circled) is the spec's value" in page
+    run = load_run(tmp_path / "run")
+    assert all(trial.robustness == min(trial.components.values()) for trial in run.trials)  # what the caption says
+    under_new = dataclasses.replace(run, task=dataclasses.replace(run.task, semantics="new"))
+    assert "the new robustness's conjunction (nu = 1)" in explain.caption("components", under_new)
 
 
 @pytest.mark.slow

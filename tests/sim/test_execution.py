@@ -85,6 +85,16 @@ def test_rollout_model_defaults_to_the_expected_duration(learned_model):
     assert rollout.signals.duration == pytest.approx(learned_model.expected_duration(), abs=0.1)
 
 
+def test_one_skill_lasts_as_long_retrieved_and_executed(learned_model):
+    from stl_lfd.hsmm import retrieve
+
+    period = learned_model.sample_period_
+    on_grid = period * round(learned_model.expected_duration() / period)
+    retrieved = retrieve(learned_model).times[-1]
+    executed = [rollout_model(learned_model, SCENE, "kinematic", rate=rate).signals.duration for rate in (100.0, 50.0)]
+    assert retrieved == pytest.approx(on_grid) and executed == pytest.approx([on_grid, on_grid])
+
+
 def test_a_rollout_after_one_that_pushed_into_the_floor_starts_without_force():
     times = np.linspace(0.0, 2.0, 481)
     hold = np.column_stack([np.full_like(times, 0.5), np.zeros_like(times), np.full_like(times, 0.4)])

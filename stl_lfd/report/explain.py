@@ -1,0 +1,193 @@
+"""What a report says in words: the task, the result, the commands that go on from here, and
+each figure's caption. Everything is derived from the run's own data, so that every statement
+is true for the run it describes (the semantics, the method's phases, the best trial)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from stl_lfd.optim.settings import SINGLE_SKILL, Parameters
+from stl_lfd.report.run_data import RunData
+
+# Figures that are drawn only when the run has what they show: name -> why one is left out.
+LEFT_OUT = {
+    "components": "the run recorded no robustness per part of the spec (its trials predate it, or every trial failed)",
+    "region_distances": "the spec names no region under F, G or G ! (a box of x, y, z bounds)",
+    "gp_slices": "fewer than three trials finished",
+    "forces": "no trial touched anything (the contact force was zero throughout)",
+    "tilt": "no trial turned the hand by more than a degree",
+}
+
+
+def semantics_in_words(run: RunData) -> str:
+    """`new robustness (nu = 1)` or `classic robustness`."""
+    task = run.task
+    return f"new robustness (nu = {task.nu:g})" if task.semantics == "new" else "classic robustness"
+
+
+def verdict(run: RunData) -> str:
+    """The result in one or two sentences: satisfied or not, best against unoptimised, first
+    satisfied trial."""
+    summary = run.summary
+    if summary.best_robustness is None:
+        return f"Every one of the {summary.trials} trials failed; the unoptimised skill scored {summary.initial_robustness:+.5f}."
+    state = "Satisfied" if summary.satisfied else "Not satisfied yet"
+    text = (
+        f"{state}: the best trial ({summary.best_trial} of {summary.trials}) scores {summary.best_robustness:+.5f} "
+        f"({semantics_in_words(run)}), where the unoptimised skill scored {summary.initial_robustness:+.5f}."
+    )
+    if summary.first_satisfied_trial is not None:
+        text += f" The first trial that satisfied the spec was trial {summary.first_satisfied_trial}."
+    elif summary.initial_robustness > 0:
+        text += " The unoptimised skill already satisfied the spec; no trial did."
+    return text
+
+
+def task_rows(run: RunData) -> list[tuple[str, str]]:
+    """The task as a table: what was run, what was optimised, how, and how long it took."""
+    task, summary = run.task, run.summary
+    placements = f", {len(task.placements)} object placements (the worst counts)" if task.placements else ""
+    status = "complete" if summary.complete else f"stopped after {summary.trials} of {task.optimizer.trials} trials"
+    return [
+        ("spec", _shown_path(task.spec)),
+        ("robustness", semantics_in_words(run) + "; above 0 satisfies the spec"),
+        ("execution", f"{task.backend} backend, scene {task.scene}{placements}; {task.duration:g} s at {task.rate:g} Hz"),
+        ("optimised", "; ".join(optimised_in_words(run))),
+        ("parameters", f"{run.space.dimension}: {', '.join(run.space.names)}"),
+        ("method", f"{task.optimizer.phases}; seed {task.optimizer.seed}"),
+        ("trials", f"{summary.trials} finished ({status}), {summary.failed_trials} failed, {summary.wall_seconds:.1f} s in all"),
+        ("run directory", _shown_path(run.path)),
+    ]
+
+
+def optimised_in_words(run: RunData) -> list[str]:
+    """What moves in each skill, with its bounds: `the means of states 2, 3 (x, y, z) within
+    +-2 standard deviations`, ..."""
+    phrases = []
+    for skill, parameters in run.task.parameters.items():
+        prefix = "" if skill == SINGLE_SKILL else f"{skill}: "
+        phrases += [prefix + phrase for phrase in _skill_parameters(parameters)]
+    return phrases
+
+
+def _skill_parameters(parameters: Parameters) -> list[str]:
+    means, durations = parameters.means, parameters.durations
+    phrases = []
+    if means.components:
+        phrase = f"the means of {_states(means.components)} ({', '.join(means.coordinates)})"
+        phrase += " moved together by one offset" if means.together else ""
+        phrase += f" in frame {means.frame}" if means.frame else ""
+        phrases.append(phrase + f", within {_deviations(means.beta)}")
+    if durations.components:
+        phrases.append(f"the duration means of {_states(durations.components)}, within {_deviations(durations.width)}")
+    transitions = {
+        "none": "transitions not optimised",
+        "band": "the transition band (each state's next two successors)",
+        "full": "every transition probability",
+    }
+    phrases.append(transitions[parameters.transitions])
+    return phrases
+
+
+def _deviations(count: float) -> str:
+    return f"±{count:g} standard deviation" + ("" if count == 1 else "s")
+
+
+def _states(components: tuple[int, ...] | str) -> str:
+    if components == "all":
+        return "all states"
+    return ("state " if len(components) == 1 else "states ") + ", ".join(str(state) for state in components)
+
+
+def commands(run: RunData) -> list[tuple[str, str]]:
+    """`(command, what it does)`: watch the best trial, continue the run, redraw this report."""
+    path = _shown_path(run.path)
+    found = []
+    if run.best is not None:
+        trial = run.best.trial
+        found.append(
+            (f"stlopt replay {path} --trial {trial}", f"watch the best trial again (in a window, or without a display as {path}/replay-trial-{trial}.mp4)")
+        )
+    task_file = _task_file(run)
+    if task_file is not None:
+        more = max(run.task.optimizer.trials, run.summary.trials) * 2
+        found.append((f"stlopt optimize {task_file} --out {path} --resume -N {more}", f"continue the run up to {more} trials"))
+    found.append((f"stlopt report {path}", "redraw this report (after the run went on)"))
+    return found
+
+
+def _task_file(run: RunData) -> str | None:
+    from stl_lfd.optim.runs.directory import RunDirectory
+
+    inputs = RunDirectory(run.path).inputs()
+    return _shown_path(Path(inputs["task_file"])) if inputs else None
+
+
+def _shown_path(path: Path) -> str:
+    """`path` relative to the working directory when it lies inside it."""
+    path = Path(path)
+    try:
+        return str(path.resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path.resolve()) if path.is_absolute() else os.fspath(path)
+
+
+def caption(name: str, run: RunData) -> str:
+    """The caption of figure `name` of this run."""
+    best = f"the best (trial {run.best.trial}) in red" if run.best is not None else "no best trial yet"
+    numbered = "darker in trial order, the unoptimised skill dashed, " + best
+    semantics = semantics_in_words(run)
+    optimizer = run.task.optimizer
+    captions = {
+        "trajectories": (
+            f"End-effector paths of every trial seen from above (x-y) and from the side (x-z, y-z): {numbered}. "
+            "Circles mark where the unoptimised and the best path start, squares where they end; the spec's regions are the coloured boxes."
+        ),
+        "region_distances": (
+            "Signed distance (m, negative inside) to each region the spec names, over the time window in which it applies: "
+            "F R is met when the curve dips below 0 somewhere in its window, G R when it stays below 0 throughout, "
+            f"G !R when it stays above 0; {best}."
+        ),
+        "robustness": (
+            f"The {semantics} of each trial, the value the optimiser maximises (above 0 satisfies the spec): "
+            f"the first {optimizer.initial} trials ({optimizer.initial_choice}) as squares, "
+            f"then those of method {optimizer.method} as circles; the line is the best so far, the dashed line the unoptimised skill."
+        ),
+        "components": _components_caption(run),
+        "gp_slices": (
+            "A Gaussian process refitted on the trials, along one or two parameters through the best point (the others held at the best's values): "
+            "its mean, its 95 % band and the trials, projected. It shows what the trials say about these parameters "
+            "(methods plan and stl model each part of the spec apart instead)."
+        ),
+        "transitions": "The skill's states and transition probabilities before and after optimisation (edge width by probability), the states the retrieval follows in red.",
+        "durations": "Duration means of each state per trial, stacked: the skill's timeline trial by trial (the best trial's label in red).",
+        "forces": f"Contact force over time per trial: {numbered}.",
+        "compare": "The best robustness so far, trial by trial, of this run and of each run given with --compare (each in its own semantics, named in the legend).",
+        "tilt": f"The hand's tilt (the angle between its approach axis and straight down) over time per trial: {numbered}.",
+    }
+    return captions.get(name, name)
+
+
+def _components_caption(run: RunData) -> str:
+    task = run.task
+    if task.semantics == "classic":
+        rule = "their minimum, so the lowest part (circled) is the spec's value"
+    else:
+        rule = (
+            f"the new robustness's conjunction (nu = {task.nu:g}): while some part is below 0 the spec's value is negative and at or "
+            "above the lowest part (circled); once every part is above 0 it is a mean of the parts weighted towards the lowest, "
+            "so it lies between the lowest part and their mean"
+        )
+    text = f"The robustness of each top-level part of the spec per trial and the spec's value (black), which is {rule}."
+    if task.placements:
+        text += " With several object placements the parts are composed at each placement, and the worst placement counts."
+    return text
+
+
+def left_out(run: RunData, drawn: set[str]) -> list[tuple[str, str]]:
+    """`(figure, why)` for each figure this run does not show."""
+    reasons = dict(LEFT_OUT)
+    if not run.transitions_optimised:
+        reasons["transitions"] = "the transitions were not optimised, so the graph is the same before and after (stlopt learn --plot draws the skill's)"
+    return [(f"{name}.png", why) for name, why in reasons.items() if name not in drawn]
