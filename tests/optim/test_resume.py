@@ -68,6 +68,16 @@ def test_resume_refuses_a_spec_whose_meaning_changed_but_not_a_new_comment(tmp_p
     assert len((tmp_path / "run" / "trials.jsonl").read_text().splitlines()) == 4
 
 
+@pytest.mark.slow
+def test_a_behaviour_run_started_from_a_relative_task_path_resumes(tmp_path, monkeypatch):
+    monkeypatch.chdir(ROOT)  # configs/phi3_strict.yaml, as a user in the repository types it
+    options = ["--backend", "kinematic", "-M", "2", "--out", str(tmp_path / "run")]
+    assert runner.invoke(app, ["optimize", "configs/phi3_strict.yaml", "-N", "2", *options]).exit_code == 0
+    resumed = runner.invoke(app, ["optimize", "configs/phi3_strict.yaml", "-N", "3", *options, "--resume"])
+    assert resumed.exit_code == 0, resumed.stderr
+    assert json.loads(resumed.stdout)["trials"] == 3
+
+
 def test_a_run_folder_honours_the_umask(tmp_path, learned_model_file):
     task = small_task(tmp_path, learned_model_file)
     previous = os.umask(0o022)

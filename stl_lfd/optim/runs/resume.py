@@ -47,7 +47,8 @@ def fingerprint(task: Task, spec: ast.Spec | None = None) -> dict[str, str]:
     if task.behaviour is not None:
         from stl_lfd.skill.behaviour import load_behaviour
 
-        digests["behaviour"] = _digest(repr(load_behaviour(task.behaviour)))
+        # resolved, so that the paths inside it are the same from the task file and the run's record
+        digests["behaviour"] = _digest(repr(load_behaviour(Path(task.behaviour).resolve())))
     return digests
 
 
