@@ -7,6 +7,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
+
 from stl_lfd.optim.settings import SINGLE_SKILL, Parameters
 from stl_lfd.report.run_data import RunData
 
@@ -143,6 +145,7 @@ def caption(name: str, run: RunData) -> str:
         "trajectories": (
             f"End-effector paths of every trial seen from above (x-y) and from the side (x-z, y-z): {numbered}. "
             "Circles mark where the unoptimised and the best path start, squares where they end; the spec's regions are the coloured boxes."
+            + (" Black arrows: where the best trial's hand points (its approach axis), projected on each view." if _best_turns_the_hand(run) else "")
         ),
         "region_distances": (
             "Signed distance (m, negative inside) to each region the spec names, over the time window in which it applies: "
@@ -167,6 +170,13 @@ def caption(name: str, run: RunData) -> str:
         "tilt": f"The hand's tilt (the angle between its approach axis and straight down) over time per trial: {numbered}.",
     }
     return captions.get(name, name)
+
+
+def _best_turns_the_hand(run: RunData) -> bool:
+    from stl_lfd.report.figures import TURNING
+
+    table = run.signals.get(run.best.trial) if run.best is not None else None
+    return table is not None and "tilt" in table.columns and float(np.max(table.columns["tilt"])) >= TURNING
 
 
 def _components_caption(run: RunData) -> str:

@@ -52,7 +52,8 @@ def trajectories(run: RunData) -> Figure:
     panels[1].set_title("from the side (x-z)")
     panels[2].set_title("from the side (y-z)")
     if best is not None:
-        _approach_axes(panels[0], tables[best])
+        for axes, (across, up) in zip(panels, VIEWS):
+            _approach_axes(axes, tables[best], across, up)
     handles = [*panels[0].get_legend_handles_labels()[0], *_end_markers()]
     figure.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize="small")
     figure.suptitle(f"{run.task.name}: end-effector paths of {len(numbers)} trials")
@@ -100,15 +101,17 @@ def _end_markers() -> list:
     return [Line2D([], [], marker="o", color="0.3", ls="none", label="start"), Line2D([], [], marker="s", color="0.3", ls="none", label="end")]
 
 
-def _approach_axes(axes, table, count: int = 12, length: float = 0.03) -> None:
+def _approach_axes(axes, table, across: str = "x", up: str = "y", count: int = 12, length: float = 0.03) -> None:
     """Arrows along a path that turns the hand: its approach axis (the gripper's z) at `count`
-    instants, projected on the x-y plane."""
+    instants, projected on the view's plane (`across`, `up`)."""
     if not set(QUATERNION_COLUMNS) <= set(table.columns) or "tilt" not in table.columns or np.max(table.columns["tilt"]) < TURNING:
         return
     at = np.linspace(0, table.samples - 1, count).astype(int)
     approach = rotations.to_matrix(np.column_stack([table.columns[name][at] for name in QUATERNION_COLUMNS]))[:, :, 2]
-    x, y = table.columns["x"][at], table.columns["y"][at]
-    axes.quiver(x, y, approach[:, 0], approach[:, 1], color="black", angles="xy", scale_units="xy", scale=1 / length, width=0.006, label="approach axis (best)")
+    columns = {"x": 0, "y": 1, "z": 2}
+    u, v = approach[:, columns[across]], approach[:, columns[up]]
+    x, y = table.columns[across][at], table.columns[up][at]
+    axes.quiver(x, y, u, v, color="black", angles="xy", scale_units="xy", scale=1 / length, width=0.006, zorder=5, label="approach axis (best)")
 
 
 def tilt(run: RunData) -> Figure | None:

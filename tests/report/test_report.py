@@ -66,6 +66,7 @@ def test_report_writes_every_figure_and_an_index(run_dir, tmp_path):
     assert "6 trials: 3 chosen on their plans, then plan" in page  # as stlopt optimize names the phases
     assert "the means of state 3 (x, y, z), within ±2 standard deviations" in page and "the transition band" in page
     assert f"stlopt replay {run_dir.resolve()} --trial {summary.best_trial}" in page
+    assert "Black arrows" not in page  # the hand points down throughout: no approach axes drawn or named
     assert not (out / "forces.png").exists()  # the kinematic backend touches nothing
     assert not (out / "tilt.png").exists()  # a skill without orientation points the hand down throughout
 
@@ -142,3 +143,4 @@ def test_a_run_that_turns_the_hand_draws_its_tilt_and_approach_axis(tmp_path):
     assert result.exit_code == 0, result.stderr
     assert_picture(folder / "report" / "tilt.png")
     assert 'src="tilt.png"' in (folder / "report" / "index.html").read_text()
+    assert "Black arrows: where the best trial's hand points" in page_text(folder / "report" / "index.html")
