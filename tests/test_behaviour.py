@@ -1,5 +1,6 @@
 """Behaviour files and the joined reference of a behaviour."""
 
+import copy
 from pathlib import Path
 
 import numpy as np
@@ -115,3 +116,26 @@ def test_a_skill_from_one_demonstration_learned_in_its_object_frame(tmp_path):
         write(tmp_path, f"scene: s\nsteps:\n  - {{skill: a, demos: {ROOT / 'demos' / 'pick_lying' / 'demo_01.csv'}, min_spread: [2mm, 1deg, 5%]}}\n")
     )
     assert behaviour_models(narrower)["a"].min_spread.position == pytest.approx(0.002)
+
+
+def test_a_batch_of_behaviour_references_is_each_reference_alone(pick_insert_models):
+    """Method `plan` retrieves the references of many candidate points together: exactly the
+    reference of each alone (its trial on the kinematic backend executes it)."""
+    from stl_lfd.sim import load_scene
+    from stl_lfd.skill.behaviour import behaviour_references
+
+    behaviour, scene = load_behaviour(BEHAVIOUR), load_scene("pick_insert")
+    rng = np.random.default_rng(0)
+    sets = []
+    for _ in range(3):
+        skills = {name: copy.deepcopy(model) for name, model in pick_insert_models.items()}
+        skills["pick"].duration_means_ = skills["pick"].duration_means_ * rng.uniform(0.8, 1.2, size=skills["pick"].n_states)
+        skills["insert"].means_ = skills["insert"].means_ + rng.normal(scale=0.005, size=skills["insert"].means_.shape)
+        sets.append(skills)
+    batch = behaviour_references(behaviour, sets, scene.gripper_opening, 48, scene.frame_poses)
+    for skills, reference in zip(sets, batch):
+        alone = behaviour_reference(behaviour, skills, scene.gripper_opening, 48, scene.frame_poses)
+        assert reference.events == alone.events
+        for name in ("times", "positions", "gripper", "skills", "states"):
+            assert np.array_equal(getattr(reference, name), getattr(alone, name)), name
+        assert (reference.orientations is None and alone.orientations is None) or np.array_equal(reference.orientations, alone.orientations)

@@ -7,17 +7,20 @@ x_{t+1} = A x_t + B u_t and a given x_0. The value function is V_t(x) = x^T P_t 
     P_t = Q_t + A^T P_{t+1} (A - B K_t),  p_t = Q_t m_t + (A - B K_t)^T p_{t+1},
 and the optimal control u_t = -K_t x_t + k_t.
 
-Tracking targets are piecewise constant (one per HSMM state), so (P_t, p_t) reach the fixed
-point of each segment's recursion after a few dozen steps; from there the step is skipped and
-the converged values are reused, which makes the recursion cost scale with the number of
-segments rather than the horizon. The P recursion of a segment does not depend on the targets,
-so it is computed once for the segments that retrievals with other means or durations share.
+Tracking targets are piecewise constant (one per HSMM state), so P_t reaches the fixed point
+of each segment's recursion after a few dozen steps; from there the converged gains are reused,
+which makes the Riccati cost scale with the number of segments rather than the horizon. The P
+recursion of a segment does not depend on the targets, so it is computed once for the segments
+that retrievals with other means or durations share. What does depend on the targets (p_t and
+the trajectory) is linear and cheap per step, and `solve_batch` runs it for many problems at
+once (method `plan` retrieves the plans of a batch of candidate points so).
 """
 
 from __future__ import annotations
 
 from collections import OrderedDict
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 
@@ -48,7 +51,7 @@ def solve(
     x0: np.ndarray,
     segment_ids: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Optimal tracking trajectory.
+    """Optimal tracking trajectory: `solve_batch` of one problem.
 
     Args:
         A: `n x n` dynamics, B: `n x m` input matrix.
@@ -62,18 +65,170 @@ def solve(
     Returns:
         states: `T x n` trajectory (states[0] = x0), controls: `(T - 1) x m`.
     """
-    steps = targets.shape[0] if segment_ids is None else segment_ids.size
-    ids = np.arange(steps) if segment_ids is None else segment_ids
-    gains, offsets = _backward(A, B, Q, R, targets, ids)
-    states = np.empty((steps, A.shape[0]))
-    controls = np.empty((steps - 1, B.shape[1]))
-    states[0] = x0
-    closed_loop = A - B @ gains  # (T-1) x n x n
-    drive = np.einsum("nm,tm->tn", B, offsets)  # (T-1) x n
-    for t in range(steps - 1):
-        states[t + 1] = closed_loop[t] @ states[t] + drive[t]
-    controls[:] = offsets - np.einsum("tmn,tn->tm", gains, states[:-1])
+    ids = np.arange(targets.shape[0]) if segment_ids is None else np.asarray(segment_ids)
+    (states,) = solve_batch(A, B, [Tracking(Q, R, targets, x0, ids)])
+    controls = (states[1:] - states[:-1] @ A.T) @ np.linalg.pinv(B).T  # x_{t+1} = A x_t + B u_t
     return states, controls
+
+
+@dataclass(frozen=True)
+class Tracking:
+    """One tracking problem of a batch (see `solve`).
+
+    Attributes:
+        Q: `S x n x n` state cost of each row, R: `m x m` control cost.
+        targets: `S x n` tracked state of each row, x0: `n` initial state.
+        segment_ids: `T` row of each step (T >= 2).
+    """
+
+    Q: np.ndarray
+    R: np.ndarray
+    targets: np.ndarray
+    x0: np.ndarray
+    segment_ids: np.ndarray
+
+
+def solve_batch(A: np.ndarray, B: np.ndarray, problems: Sequence[Tracking]) -> list[np.ndarray]:
+    """Optimal trajectories (`T_i x n` each, starting at x0) of N tracking problems with the
+    same dynamics, vectorised over the problems.
+
+    Each problem's gains come from its segments' recursions (`_segment_recursion`, shared by
+    the problems that meet the same segments); the feedforward recursion and the trajectory
+    then run for all problems at once, a step at a time. Problems are aligned at their ends:
+    before a shorter one starts, its rows hold x0. Each problem's arithmetic is the same in any
+    batch, so a batch gives exactly what each of its problems gives alone.
+    """
+    table = _GainTable(A, B)
+    steps = max(problem.segment_ids.size for problem in problems)
+    rows, firsts = (np.stack(arrays) for arrays in zip(*(table.rows(problem, steps) for problem in problems)))  # N x (steps - 1)
+    weighted = np.stack([_weighted_targets(problem, steps) for problem in problems])  # N x steps x n
+    gains, feeds, closed, settled = table.arrays()
+    offsets = _feedforward(feeds, closed, settled, rows, firsts, weighted)
+    states = _trajectory(B, closed, rows, offsets, np.stack([problem.x0 for problem in problems]))
+    return [states[i, steps - problem.segment_ids.size :] for i, problem in enumerate(problems)]
+
+
+class _GainTable:
+    """The recursion steps that the problems of a batch use, in one table of rows; row 0 holds
+    the state (no gain, the identity as closed loop) for the steps before a shorter problem."""
+
+    def __init__(self, A: np.ndarray, B: np.ndarray) -> None:
+        self.A, self.B = A, B
+        n, m = B.shape
+        self.parts = [_SegmentRecursion(np.zeros((1, m, n)), np.zeros((1, m, n)), np.eye(n)[None], np.zeros((1, n, n)), False)]
+        self.first: dict[int, int] = {id(self.parts[0]): 0}  # a recursion's first row
+        self.size = 1
+
+    def rows(self, problem: Tracking, steps: int) -> tuple[np.ndarray, np.ndarray]:
+        """The table row of each of the problem's steps but the last, and the first step of the
+        segment each is in, aligned at the end of `steps` (`steps - 1` each; row 0 and first
+        step 0 before the problem starts). The segments are walked backwards, each entered
+        with the P its successor ends with."""
+        ids, Q = problem.segment_ids, problem.Q
+        rows, firsts = np.zeros(steps - 1, dtype=np.intp), np.zeros(steps - 1, dtype=np.intp)
+        offset = steps - ids.size
+        P = Q[ids[-1]]
+        t = ids.size - 2
+        while t >= 0:
+            first = t
+            while first > 0 and ids[first - 1] == ids[t]:
+                first -= 1
+            recursion = _segment_recursion(self.A, self.B, problem.R, Q[ids[t]], P, t - first + 1)
+            last = len(recursion.gains) - 1
+            rows[offset + first : offset + t + 1] = self._first_row(recursion) + np.minimum(np.arange(t - first, -1, -1), last)
+            firsts[offset + first : offset + t + 1] = offset + first
+            P = recursion.values[min(t - first, last)]
+            t = first - 1
+        return rows, firsts
+
+    def _first_row(self, recursion: "_SegmentRecursion") -> int:
+        if id(recursion) not in self.first:
+            self.first[id(recursion)] = self.size
+            self.parts.append(recursion)
+            self.size += len(recursion.gains)
+        return self.first[id(recursion)]
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Gains `G x m x n`, feedforward maps `G x m x n`, closed loops `G x n x n`, and `G`
+        flags: the row is the fixed point of a converged recursion."""
+        settled = [np.arange(len(part.gains)) == (len(part.gains) - 1 if part.converged else -1) for part in self.parts]
+        return tuple(np.concatenate([getattr(part, name) for part in self.parts]) for name in ("gains", "feeds", "closed")) + (np.concatenate(settled),)
+
+
+def _weighted_targets(problem: Tracking, steps: int) -> np.ndarray:
+    """`steps x n`: Q_t m_t at each of the problem's steps, aligned at the end (0 before)."""
+    weighted = np.zeros((steps, problem.Q.shape[-1]))
+    weighted[steps - problem.segment_ids.size :] = (problem.Q @ problem.targets[:, :, None])[problem.segment_ids, :, 0]
+    return weighted
+
+
+def _feedforward(feeds: np.ndarray, closed: np.ndarray, settled: np.ndarray, rows: np.ndarray, firsts: np.ndarray, weighted: np.ndarray) -> np.ndarray:
+    """Feedforward terms k_t (`N x (T-1) x m`) of the backward recursion p_t = Q_t m_t +
+    (A - B K_t)^T p_{t+1} from p_{T-1} = Q_{T-1} m_{T-1}, for table `rows` (`N x (T-1)`),
+    the first step of each step's segment (`firsts`) and the `weighted` targets (`N x T x n`).
+
+    Once a problem's p stops changing at the fixed point of its segment's gains, p and k_t
+    stay as they are to the segment's first step; while every problem is so, the steps are
+    skipped to the nearest segment start.
+    """
+    count, steps = rows.shape
+    offsets = np.empty((count, steps, feeds.shape[1], 1))
+    weighted = weighted[..., None]  # N x T x n x 1
+    transposed = closed.transpose(0, 2, 1)
+    at_fixed_point, opens = settled[rows], firsts == np.arange(steps)  # N x (T-1) each
+    checked, opened = at_fixed_point.any(axis=0).tolist(), opens.any(axis=0).tolist()  # per step, as Python flags
+    p = weighted[:, -1]  # N x n x 1
+    held = np.zeros(count, dtype=bool)  # p at its segment's fixed point
+    held_any = held_all = False
+    t = steps - 1
+    for chunk in _chunks(steps, count * closed[0].size, backwards=True):
+        chunk_feeds, chunk_transposed = feeds[rows[:, chunk]], transposed[rows[:, chunk]]  # N x L x . x .
+        while t >= chunk.start:
+            if held_all:
+                begin = int(firsts[:, t].max())
+                offsets[:, begin : t + 1] = offsets[:, t + 1, None]
+                held = firsts[:, t] < begin
+                held_any, held_all = bool(held.any()), bool(held.all())
+                t = begin - 1
+                continue
+            k = t - chunk.start
+            np.matmul(chunk_feeds[:, k], p, out=offsets[:, t])
+            following = chunk_transposed[:, k] @ p
+            following += weighted[:, t]
+            if held_any:
+                offsets[held, t] = offsets[held, t + 1]
+                following[held] = p[held]
+            if checked[t]:
+                held |= at_fixed_point[:, t] & _unchanged_rows(following, p)
+            if opened[t]:
+                held &= ~opens[:, t]
+            if checked[t] or opened[t]:
+                held_any, held_all = bool(held.any()), bool(held.all())
+            p = following
+            t -= 1
+    return offsets[..., 0]
+
+
+def _trajectory(B: np.ndarray, closed: np.ndarray, rows: np.ndarray, offsets: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """States `N x T x n` from `x0` (`N x n`) under x_{t+1} = (A - B K_t) x_t + B k_t."""
+    count, steps = rows.shape
+    states = np.empty((count, steps + 1, x0.shape[1], 1))
+    states[:, 0, :, 0] = x0
+    drive = B @ offsets[..., None]  # N x (T-1) x n x 1
+    for chunk in _chunks(steps, count * closed[0].size):
+        loops = closed[rows[:, chunk]]  # N x L x n x n
+        for t in range(chunk.start, chunk.stop):
+            x = np.matmul(loops[:, t - chunk.start], states[:, t], out=states[:, t + 1])
+            x += drive[:, t]
+    return states[..., 0]
+
+
+def _chunks(steps: int, size: int, backwards: bool = False) -> list[range]:
+    """Ranges of steps whose gathered matrices (`size` numbers a step) fit in about a
+    megabyte, in order (or last first)."""
+    length = max(1, (1 << 17) // size)
+    chunks = [range(start, min(start + length, steps)) for start in range(0, steps, length)]
+    return chunks[::-1] if backwards else chunks
 
 
 @dataclass(frozen=True)
@@ -82,10 +237,10 @@ class _SegmentRecursion:
     `K` (`m x n`), the map `L B^T` (`m x n`) from `p_{t+1}` to the feedforward term, the closed
     loop `A - B K` (`n x n`) and `P_t`; `converged` when the last step left P unchanged."""
 
-    gains: tuple[np.ndarray, ...]
-    feeds: tuple[np.ndarray, ...]
-    closed: tuple[np.ndarray, ...]
-    values: tuple[np.ndarray, ...]
+    gains: np.ndarray  # L x m x n
+    feeds: np.ndarray  # L x m x n
+    closed: np.ndarray  # L x n x n
+    values: np.ndarray  # L x n x n
     converged: bool
 
 
@@ -120,46 +275,18 @@ def _segment_recursion(A: np.ndarray, B: np.ndarray, R: np.ndarray, Q: np.ndarra
         closed_loops.append(closed)
         values.append(P_next)
         P = P_next
-    recursion = _SegmentRecursion(tuple(gains), tuple(feeds), tuple(closed_loops), tuple(values), converged)
+    recursion = _SegmentRecursion(np.array(gains), np.array(feeds), np.array(closed_loops), np.array(values), converged)
     _RECURSIONS[key] = recursion
     if len(_RECURSIONS) > _RECURSIONS_KEPT:
         _RECURSIONS.popitem(last=False)
     return recursion
 
 
-def _backward(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray, targets: np.ndarray, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Feedback gains `(T-1) x m x n` and feedforward terms `(T-1) x m`."""
-    steps = ids.size
-    n, m = B.shape
-    gains = np.empty((steps - 1, m, n))
-    offsets = np.empty((steps - 1, m))
-    P = Q[ids[-1]].copy()
-    p = Q[ids[-1]] @ targets[ids[-1]]
-    t = steps - 2
-    while t >= 0:
-        segment = ids[t]
-        Q_t, q_t = Q[segment], Q[segment] @ targets[segment]
-        first = t
-        while first > 0 and ids[first - 1] == segment:
-            first -= 1
-        recursion = _segment_recursion(A, B, R, Q_t, P, t - first + 1)
-        last = len(recursion.gains) - 1
-        for k in range(t - first + 1):
-            step = min(k, last)
-            gains[t], offsets[t] = recursion.gains[step], recursion.feeds[step] @ p
-            p_next = q_t + recursion.closed[step].T @ p
-            steady = recursion.converged and k >= last and _unchanged(p_next, p)
-            p = p_next
-            t -= 1
-            if steady and t >= first:
-                # Fixed point reached: every earlier step of the segment is the same.
-                gains[first : t + 1] = gains[t + 1]
-                offsets[first : t + 1] = offsets[t + 1]
-                t = first - 1
-                break
-        P = recursion.values[min(k, last)]
-    return gains, offsets
-
-
 def _unchanged(new: np.ndarray, old: np.ndarray) -> bool:
     return float(np.max(np.abs(new - old))) <= _CONVERGED * (1.0 + float(np.max(np.abs(old))))
+
+
+def _unchanged_rows(new: np.ndarray, old: np.ndarray) -> np.ndarray:
+    """`_unchanged` of each of N rows (`N x ...` arrays)."""
+    axes = tuple(range(1, new.ndim))
+    return np.max(np.abs(new - old), axis=axes) <= _CONVERGED * (1.0 + np.max(np.abs(old), axis=axes))

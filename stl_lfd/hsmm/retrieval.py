@@ -9,7 +9,7 @@ execution rates such as 240 Hz.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Mapping
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -58,8 +58,7 @@ def retrieve(
 
     Args:
         model: a fitted (possibly modified) HSMM or TP-HSMM.
-        duration: seconds to retrieve (default: the model's expected duration, to the nearest
-            multiple of its sample period).
+        duration: seconds to retrieve (default: the model's expected duration).
         rate: samples per second of the result (default: the model's own rate).
         control_cost: weight r of the acceleration cost R = r I.
         poses: for a TP-HSMM, the pose of every frame but `base` (see `TPHSMM.at`).
@@ -71,19 +70,60 @@ def retrieve(
         orientation is continuous and reaches each state's mean orientation as the position
         reaches its mean (Calinon, IEEE RAM 2020).
     """
-    if isinstance(model, TPHSMM):
-        model = model.at(poses or {})
+    return retrieve_batch([model], [duration], rate, control_cost, poses)[0]
+
+
+def retrieve_batch(
+    models: Sequence[HSMM],
+    durations: Sequence[float | None] | None = None,
+    rate: float | None = None,
+    control_cost: float = DEFAULT_CONTROL_COST,
+    poses: Mapping[str, Pose] | None = None,
+) -> list[Trajectory]:
+    """The reference trajectories of N models (`retrieve` of each, exactly), their trackers
+    solved together (`lqt.solve_batch`) where the models share a sample period and signals: the
+    same skill with other parameters, as method `plan` retrieves the plans of its candidates.
+
+    Args:
+        models: N fitted HSMMs or TP-HSMMs.
+        durations: N seconds to retrieve (None, or a None entry: the model's expected duration).
+        rate, control_cost, poses: as in `retrieve`, for every model.
+    """
+    durations = [None] * len(models) if durations is None else list(durations)
+    models = [model.at(poses or {}) if isinstance(model, TPHSMM) else model for model in models]
+    trajectories: list[Trajectory | None] = [None] * len(models)
+    for (dt, dimension, _), members in _grouped(models, lambda model: (model.sample_period_, model.n_features, tuple(model.signal_names_))).items():
+        problems = [_tracking(models[i], durations[i], rate, control_cost) for i in members]
+        A, B = lqt.double_integrator(dimension, dt)
+        solutions = lqt.solve_batch(A, B, [problem for problem, _, _ in problems])
+        # Retrievals of the same length and duration are resampled together.
+        for (_, duration), same in _grouped(problems, lambda problem: (problem[1].size, problem[2])).items():
+            states, solution = np.stack([problems[k][1] for k in same]), np.stack([solutions[k] for k in same])
+            for k, trajectory in zip(same, _trajectories(models[members[same[0]]], states, solution, duration, rate)):
+                trajectory.orientations = models[members[k]].orientations(trajectory.positions)
+                trajectories[members[k]] = trajectory
+    return trajectories
+
+
+def _grouped(items: Sequence, key: Callable) -> dict:
+    """The positions of `items` by `key(item)`, in order."""
+    groups: dict = {}
+    for index, item in enumerate(items):
+        groups.setdefault(key(item), []).append(index)
+    return groups
+
+
+def _tracking(model: HSMM, duration: float | None, rate: float | None, control_cost: float) -> tuple[lqt.Tracking, np.ndarray, float]:
+    """The tracking problem of retrieving `model` for `duration` seconds (None: its expected
+    duration) at `rate`, its `T` state sequence and the duration."""
     dt = model.sample_period_
-    # By default the expected duration on the model's own time grid, so that the skill lasts as
-    # long at every rate (retrieved at the model's rate, or executed at the simulation's).
-    duration = dt * round(model.expected_duration() / dt) if duration is None else float(duration)
+    duration = model.expected_duration() if duration is None else float(duration)
     problem = samples_problem(duration, 1.0 / dt) or (samples_problem(duration, float(rate)) if rate is not None else "")
     if problem:
         raise ModelError(f"cannot retrieve the skill: {problem}")
     steps = int(round(duration / dt)) + 1
     states = model.state_sequence(steps)
     dimension = model.n_features
-    A, B = lqt.double_integrator(dimension, dt)
     means, covars, segments = _tracked(model, states)
     precisions = np.zeros((len(means), 2 * dimension, 2 * dimension))
     precisions[:, :dimension, :dimension] = np.linalg.inv(covars)
@@ -92,15 +132,25 @@ def retrieve(
     scale = float(np.mean([np.trace(p) / dimension for p in precisions[: model.n_states, :dimension, :dimension]]))
     R = control_cost * scale * np.eye(dimension)
     x0 = targets[states[0]].copy()
-    trajectory, _ = lqt.solve(A, B, precisions, R, targets, x0, segment_ids=segments)
-    times = np.arange(steps) * dt
-    positions, velocities = trajectory[:, :dimension], trajectory[:, dimension:]
+    return lqt.Tracking(precisions, R, targets, x0, segments), states, duration
+
+
+def _trajectories(model: HSMM, states: np.ndarray, solutions: np.ndarray, duration: float, rate: float | None) -> list[Trajectory]:
+    """The retrieved trajectories (without orientations) of N retrievals of `model`'s skill
+    from their `N x T` state sequences and the tracker's `N x T x 2D` solutions, at `rate`."""
+    dt, dimension, names = model.sample_period_, model.n_features, list(model.signal_names_)
+    times = np.arange(states.shape[1]) * dt
+    positions, velocities = solutions[..., :dimension], solutions[..., dimension:]
     if rate is not None and not np.isclose(rate * dt, 1.0):
-        trajectory = _resample(times, positions, velocities, states, rate, duration, model.signal_names_)
-    else:
-        trajectory = Trajectory(times, positions, velocities, states, list(model.signal_names_))
-    trajectory.orientations = model.orientations(trajectory.positions)
-    return trajectory
+        new_times = np.arange(int(np.floor(duration * rate + 1e-9)) + 1) / rate
+        # One spline of N x D columns: T x (N x D) in, S x (N x D) out.
+        columns = [np.ascontiguousarray(values.transpose(1, 0, 2)).reshape(len(times), -1) for values in (positions, velocities)]
+        positions, velocities = (
+            values.reshape(len(new_times), len(states), dimension).transpose(1, 0, 2) for values in hermite_interpolation(times, *columns, new_times)
+        )
+        states = states[:, np.minimum(np.round(new_times / dt).astype(int), states.shape[1] - 1)]
+        times = new_times
+    return [Trajectory(times, positions[k], velocities[k], states[k], list(names)) for k in range(len(states))]
 
 
 def _tracked(model: HSMM, states: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -118,15 +168,6 @@ def _tracked(model: HSMM, states: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
     segments[switch:] = model.n_states
     means = np.vstack([model.means_, end[1]])
     return means, at_reference(means, np.concatenate([model.covars_, end[2][None]])), segments
-
-
-def _resample(
-    times: np.ndarray, positions: np.ndarray, velocities: np.ndarray, states: np.ndarray, rate: float, duration: float, names: list[str]
-) -> Trajectory:
-    new_times = np.arange(int(np.floor(duration * rate + 1e-9)) + 1) / rate
-    new_positions, new_velocities = hermite_interpolation(times, positions, velocities, new_times)
-    nearest = np.minimum(np.round(new_times / (times[1] - times[0])).astype(int), len(states) - 1)
-    return Trajectory(new_times, new_positions, new_velocities, states[nearest], list(names))
 
 
 def hermite_interpolation(times: np.ndarray, positions: np.ndarray, velocities: np.ndarray, new_times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -65,13 +66,15 @@ class SkillObjective:
         plan.backend = KinematicBackend()
         return plan
 
-    def plan_score(self):
-        """x (`d`) -> the plan's robustness of each part, then route (the prior of method `plan`)."""
+    def plan_score(self) -> Callable[[np.ndarray], np.ndarray]:
+        """`b x d` points -> `b x o`: the plan's robustness of each part, then route, at each
+        point (the prior of method `plan`), the points' plans retrieved together; raises when
+        a point has no plan."""
         planned, routes = self.planned(), self.composition.route_names
 
-        def score(x: np.ndarray) -> np.ndarray:
-            outcome = planned(x)
-            return np.array(list(outcome.components.values()) + [outcome.routes[route] for route in routes], dtype=float)
+        def score(points: np.ndarray) -> np.ndarray:
+            outcomes = planned.evaluate_all([self.space.apply(self.models, x) for x in points])
+            return np.array([list(outcome.components.values()) + [outcome.routes[route] for route in routes] for outcome in outcomes], dtype=float)
 
         return score
 
@@ -81,11 +84,24 @@ class SkillObjective:
 
     def evaluate(self, models: dict[str, HSMM], trial: int = 0) -> Outcome:
         """Execute `models` as trial `trial` (0: the unoptimised skill) and score the signals."""
-        if self.backend is None:
-            raise ExecutionError("this objective only scores signals recorded elsewhere (it has no backend)")
         if isinstance(self.backend, CommandBackend):
             self.backend.trial = trial
-        outcomes = [self.score(placed.with_models(models).execute(self.backend, self.task.rate).signals) for placed in self.placed]
+        return self.evaluate_all([models])[0]
+
+    def evaluate_all(self, models: Sequence[dict[str, HSMM]]) -> list[Outcome]:
+        """`evaluate` N sets of models: their references retrieved together, then executed and
+        scored one after the other."""
+        if self.backend is None:
+            raise ExecutionError("this objective only scores signals recorded elsewhere (it has no backend)")
+        placements = [
+            [self.score(placed.execute(self.backend, self.task.rate, reference=reference).signals) for reference in placed.references(models)]
+            for placed in self.placed
+        ]
+        return [self._worst([outcomes[index] for outcomes in placements]) for index in range(len(models))]
+
+    def _worst(self, outcomes: list[Outcome]) -> Outcome:
+        """One trial's outcome from its `outcomes` at each placement: the worst robustness and
+        its signals, and the parts at every placement."""
         if len(outcomes) == 1:
             return outcomes[0]
         worst = min(outcomes, key=lambda outcome: outcome.robustness)

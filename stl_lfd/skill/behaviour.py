@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -30,7 +30,7 @@ from stl_lfd.poses import Pose
 from stl_lfd.rotations import DOWN
 from stl_lfd.sim import TIME_STEP, Reference
 from stl_lfd.sim.scene import scene_reference
-from stl_lfd.skill.execution import reference_of
+from stl_lfd.skill.execution import references_of
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
 ACTIONS = ("grasp", "release")
@@ -158,7 +158,33 @@ def behaviour_reference(
     """One reference for the whole behaviour; padded (holding the last pose) or cut to
     `duration` seconds when given. Skills with frames are retrieved for the scene's frame
     `poses` (name -> pose)."""
+    return behaviour_references(behaviour, [models], open_width, duration, poses)[0]
+
+
+def behaviour_references(
+    behaviour: Behaviour, models: Sequence[dict[str, HSMM]], open_width: float, duration: float | None = None, poses: Mapping[str, Pose] | None = None
+) -> list[Reference]:
+    """`behaviour_reference` of N sets of the behaviour's skills (the same skills with other
+    parameters), each skill step retrieved for all of them together."""
     poses = poses or {}
+    retrieved = [
+        references_of(
+            [skills[step.name] for skills in models], [skills[step.name].expected_duration() + step.settle for skills in models], step.name, step.poses(poses)
+        )
+        if isinstance(step, SkillStep)
+        else None
+        for step in behaviour.steps
+    ]
+    starts = _first_positions(behaviour, models, poses) if not isinstance(behaviour.steps[0], SkillStep) else [None] * len(models)
+    return [
+        _joined(behaviour, [pieces[index] if pieces is not None else None for pieces in retrieved], start, open_width, duration)
+        for index, start in enumerate(starts)
+    ]
+
+
+def _joined(behaviour: Behaviour, retrieved: list[Reference | None], start: np.ndarray | None, open_width: float, duration: float | None) -> Reference:
+    """The behaviour's reference from the `retrieved` reference of each skill step (None for
+    actions), starting at `start` (`1 x 3`) when it starts with an action."""
     pieces: list[np.ndarray] = []
     grippers: list[np.ndarray] = []
     skills: list[np.ndarray] = []
@@ -166,15 +192,13 @@ def behaviour_reference(
     turns: list[np.ndarray | None] = []  # each piece's orientations (None: straight down)
     events: list[tuple[float, str]] = []
     clock, closed = 0.0, False
-    for step in behaviour.steps:
-        if isinstance(step, SkillStep):
-            model = models[step.name]
-            skill = reference_of(model, model.expected_duration() + step.settle, step.name, step.poses(poses))
+    for step, skill in zip(behaviour.steps, retrieved):
+        if skill is not None:
             positions, names, followed, turn = skill.positions, skill.skills, skill.states, skill.orientations
         else:
             events.append((clock, step.action))
             closed = step.action == "grasp"
-            positions = np.repeat(pieces[-1][-1:] if pieces else _first_position(behaviour, models, poses), _steps(step.seconds), axis=0)
+            positions = np.repeat(pieces[-1][-1:] if pieces else start, _steps(step.seconds), axis=0)
             names, followed = np.full(len(positions), step.action), np.zeros(len(positions), dtype=int)
             turn = None if not turns or turns[-1] is None else np.repeat(turns[-1][-1:], len(positions), axis=0)
         pieces.append(positions)
@@ -212,10 +236,11 @@ def _steps(seconds: float) -> int:
     return max(1, int(round(seconds / TIME_STEP)))
 
 
-def _first_position(behaviour: Behaviour, models: dict[str, HSMM], poses: Mapping[str, Pose]) -> np.ndarray:
+def _first_positions(behaviour: Behaviour, models: Sequence[dict[str, HSMM]], poses: Mapping[str, Pose]) -> list[np.ndarray]:
+    """Where each of N sets of skills starts (`1 x 3` each): its first skill's first sample."""
     step = behaviour.skills[0]
-    first = models[step.name]
-    return reference_of(first, 2 * first.sample_period_, step.name, step.poses(poses)).positions[:1]
+    firsts = [skills[step.name] for skills in models]
+    return [reference.positions[:1] for reference in references_of(firsts, [2 * first.sample_period_ for first in firsts], step.name, step.poses(poses))]
 
 
 def reference_for(
@@ -223,11 +248,19 @@ def reference_for(
 ) -> Reference:
     """The reference of a behaviour, or of the single skill in `models` when there is none;
     skills with frames for the frame `poses` of the scene."""
+    return references_for([models], behaviour, open_width, duration, poses)[0]
+
+
+def references_for(
+    models: Sequence[dict[str, HSMM]], behaviour: Behaviour | None, open_width: float, duration: float | None = None, poses: Mapping[str, Pose] | None = None
+) -> list[Reference]:
+    """`reference_for` each of N sets of skills (the same skills with other parameters),
+    retrieved together."""
     if behaviour is not None:
-        return behaviour_reference(behaviour, models, open_width, duration, poses)
-    if len(models) != 1:
-        raise ConfigError(f"several skills ({', '.join(models)}) but no behaviour to sequence them")
-    return reference_of(next(iter(models.values())), duration, poses=poses)
+        return behaviour_references(behaviour, models, open_width, duration, poses)
+    if any(len(skills) != 1 for skills in models):
+        raise ConfigError(f"several skills ({', '.join(next(skills for skills in models if len(skills) != 1))}) but no behaviour to sequence them")
+    return references_of([next(iter(skills.values())) for skills in models], [duration] * len(models), poses=poses)
 
 
 def load_skill(path: str | Path) -> tuple[dict[str, HSMM], Behaviour | None]:

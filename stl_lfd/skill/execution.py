@@ -7,12 +7,13 @@ optimiser, so that every command executes a model the same way.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Callable, Mapping
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
 from stl_lfd.errors import ConfigError, ModelError
-from stl_lfd.hsmm import HSMM, TPHSMM, retrieve
+from stl_lfd.hsmm import HSMM, TPHSMM, Trajectory
+from stl_lfd.hsmm.retrieval import retrieve_batch
 from stl_lfd.poses import BASE_FRAME, Pose
 from stl_lfd.sim import DEFAULT_RATE, SIMULATION_RATE, Backend, Reference, Rollout, Scene, execute, load_scene
 
@@ -23,11 +24,24 @@ def reference_of(model: HSMM, duration: float | None = None, name: str = "skill"
     """The model's retrieved trajectory at the simulation rate, as a reference to execute; its
     samples are labelled with the skill's `name` and the (1-based) HSMM state they follow. A
     TP-HSMM is retrieved for its frames at `poses` (frame name -> pose)."""
-    missing = [name for name in POSITION_SIGNALS if name not in model.signal_names_]
-    if missing:
-        raise ModelError(f"the model has no signal {', '.join(missing)}: only position skills (x, y, z) can be executed")
-    trajectory = retrieve(model, duration, rate=SIMULATION_RATE, poses=skill_poses(model, poses or {}, name))
-    columns = [model.signal_names_.index(name) for name in POSITION_SIGNALS]
+    return references_of([model], [duration], name, poses)[0]
+
+
+def references_of(models: Sequence[HSMM], durations: Sequence[float | None], name: str = "skill", poses: Mapping[str, Pose] | None = None) -> list[Reference]:
+    """`reference_of` each of N models of the skill `name` (for `durations` seconds each),
+    retrieved together (`retrieve_batch`)."""
+    for model in models:
+        missing = [signal for signal in POSITION_SIGNALS if signal not in model.signal_names_]
+        if missing:
+            raise ModelError(f"the model has no signal {', '.join(missing)}: only position skills (x, y, z) can be executed")
+    frames = {frame: pose for model in models for frame, pose in skill_poses(model, poses or {}, name).items()}
+    trajectories = retrieve_batch(models, durations, rate=SIMULATION_RATE, poses=frames)
+    return [_reference(model, trajectory, name) for model, trajectory in zip(models, trajectories)]
+
+
+def _reference(model: HSMM, trajectory: Trajectory, name: str) -> Reference:
+    """The reference of a retrieved `trajectory` of `model`, its samples labelled `name`."""
+    columns = [model.signal_names_.index(signal) for signal in POSITION_SIGNALS]
     gripper = trajectory.positions[:, model.signal_names_.index("gripper")] if "gripper" in model.signal_names_ else None
     skills = np.full(trajectory.times.shape, name)
     return Reference(

@@ -11,7 +11,7 @@ from typing import Callable, Mapping, Sequence
 from stl_lfd.hsmm import HSMM
 from stl_lfd.poses import Pose
 from stl_lfd.sim import DEFAULT_RATE, Backend, Reference, Rollout, Scene, execute, load_scene
-from stl_lfd.skill.behaviour import Behaviour, load_skill, reference_for
+from stl_lfd.skill.behaviour import Behaviour, load_skill, references_for
 
 DEFAULT_SCENE = "free_space"
 
@@ -48,7 +48,11 @@ class PlacedSkill:
     def reference(self) -> Reference:
         """What executing the skills means: the behaviour's (or the single skill's) reference,
         for the poses of the scene's object frames."""
-        return reference_for(self.models, self.behaviour, self.scene.gripper_opening, self.duration, self.scene.frame_poses)
+        return self.references([self.models])[0]
+
+    def references(self, models: Sequence[dict[str, HSMM]]) -> list[Reference]:
+        """`reference` of N sets of models (the skills with other parameters), retrieved together."""
+        return references_for(models, self.behaviour, self.scene.gripper_opening, self.duration, self.scene.frame_poses)
 
     def execute(self, backend: str | Backend, rate: float = DEFAULT_RATE, observer: Callable | None = None, reference: Reference | None = None) -> Rollout:
         """Execute the skills (or their `reference`, if already retrieved) on `backend`."""

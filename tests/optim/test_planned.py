@@ -31,6 +31,11 @@ def executed_parts(x: np.ndarray) -> np.ndarray:
     return planned_parts(x) - np.array([0.0, 0.5 * max(0.0, 0.6 - x[2])])
 
 
+def batched(parts):
+    """A plan of one point as method `plan` asks for plans: `b x d` points -> `b x o`."""
+    return lambda points: np.array([parts(x) for x in points])
+
+
 def objective(parts):
     def evaluate(x):
         values = parts(x)
@@ -40,7 +45,7 @@ def objective(parts):
 
 
 def method(optimizer):
-    return search_method(optimizer, Problem(BOUNDS, spec_composition(PARTS), plan=planned_parts))
+    return search_method(optimizer, Problem(BOUNDS, spec_composition(PARTS), plan=batched(planned_parts)))
 
 
 def run(parts, optimizer, history=()):
@@ -50,19 +55,22 @@ def run(parts, optimizer, history=()):
 def test_a_plan_is_memoised_and_a_point_without_one_is_nan():
     calls = []
 
-    def score(x):
-        calls.append(x)
-        if x[0] > 0.5:
+    def score(points):
+        calls.append(len(points))
+        if np.any(points[:, 0] > 0.5):
             raise ValueError("no reference")
-        return planned_parts(x)
+        return batched(planned_parts)(points)
 
     plan = Plan(score, BOUNDS)
-    points = np.array([[0.1, 0.2, 0.3, 0.4], [0.9, 0.2, 0.3, 0.4]])
+    points = np.array([[0.1, 0.2, 0.3, 0.4], [0.9, 0.2, 0.3, 0.4], [0.2, 0.2, 0.3, 0.4]])
     first = plan(points)
-    np.testing.assert_array_equal(first[0], planned_parts(points[0]))
+    np.testing.assert_array_equal(first[[0, 2]], batched(planned_parts)(points[[0, 2]]))
     assert np.all(np.isnan(first[1]))
-    again = plan(points)
-    assert len(calls) == 2 and np.array_equal(again[0], first[0]) and np.all(np.isnan(again[1]))
+    assert calls == [3, 1, 1, 1]  # the batch failed: each point alone
+    again = plan(points[::-1])
+    assert len(calls) == 4 and np.array_equal(again, first[::-1], equal_nan=True)
+    plan(np.array([[0.3, 0.2, 0.3, 0.4], [0.4, 0.2, 0.3, 0.4], [0.3, 0.2, 0.3, 0.4]]))
+    assert calls[4:] == [2]  # new points in one batch, each once
 
 
 def test_the_first_point_is_the_best_plan_the_search_finds():
@@ -139,3 +147,19 @@ def test_a_run_with_method_plan_scores_the_plan_on_the_kinematic_backend_and_res
     finish_run(resume_run(tmp_path / "resumed", trials=4))
     resumed = [json.loads(line) for line in (tmp_path / "resumed" / "trials.jsonl").read_text().splitlines()]
     assert [trial["x"] for trial in resumed] == [trial["x"] for trial in trials]
+
+
+def test_plans_scored_together_are_the_plans_scored_alone_and_the_kinematic_trials(tmp_path, learned_model_file):
+    """A batch of plans (their references retrieved together) gives exactly each point's plan
+    alone, and exactly the point's trial on the kinematic backend, whose difference from the
+    plan method `plan` then learns as 0."""
+    from stl_lfd.optim.objective import objective_for, task_models
+
+    task = load_task(small_task(tmp_path, learned_model_file))
+    space, objective = objective_for(task, task_models(task))
+    points = space.lower + np.random.default_rng(0).random((5, space.dimension)) * (space.upper - space.lower)
+    plans = objective.plan_score()(points)
+    assert plans.shape == (5, len(objective.composition.names))
+    for x, values in zip(points, plans):
+        assert np.array_equal(objective.plan_score()(x[None])[0], values)
+        assert np.array_equal(list(objective(x).components.values()), values)

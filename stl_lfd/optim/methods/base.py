@@ -57,8 +57,9 @@ class Problem:
         composition: the spec's parts (None: the robustness alone).
         features: what a GP sees of `b x d` unit-cube points (`features.PathFeatures`, a
             torch tensor -> `b x f`); None: the points themselves.
-        plan: the plan's robustness of each part, then route, at a point `x` (`d`, parameter
-            units) -> `o` values; raises for a point without a plan (method `plan`'s prior).
+        plan: the plan's robustness of each part, then route, at `b x d` points (parameter
+            units) -> `b x o` values, planned together; raises when a point has no plan
+            (method `plan`'s prior).
         initial_design: the `M x d` Sobol points, when already computed (saves torch's import).
     """
 

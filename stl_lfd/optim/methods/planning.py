@@ -18,10 +18,13 @@ from stl_lfd.optim.methods.posterior import PartsPosterior
 class Plan:
     """The plan's robustness of each output (the spec's parts, then its routes) at points of the
     unit cube of `bounds`: `b x d` -> `b x o`, a row of NaN where the reference could not be
-    built or scored. Memoised: the same point is planned once.
+    built or scored. Memoised: the same point is planned once. The points not planned yet are
+    planned in one batch; when the batch fails, each point on its own, so that only the points
+    without a plan get NaN.
 
     Args:
-        score: x (`d`, in parameter units) -> `o` values (raises for a point without a plan).
+        score: `b x d` points (parameter units) -> `b x o` values (raises when a point has no
+            plan).
         bounds: `2 x d` parameter bounds.
     """
 
@@ -30,18 +33,26 @@ class Plan:
         self.memo: dict[bytes, np.ndarray | None] = {}
 
     def __call__(self, unit: np.ndarray) -> np.ndarray:
-        return np.array([self._one(point) for point in np.atleast_2d(unit)])
+        unit = np.atleast_2d(unit)
+        keys = [point.tobytes() for point in unit]
+        new = {key: point for key, point in zip(keys, unit) if key not in self.memo}
+        if new:
+            self._plan(np.array(list(new.values())))
+        missing = np.full(self._outputs(), np.nan)
+        return np.array([missing if self.memo[key] is None else self.memo[key] for key in keys])
 
-    def _one(self, point: np.ndarray) -> np.ndarray:
-        key = point.tobytes()
-        if key not in self.memo:
-            try:
-                values = np.asarray(self.score(from_unit(point, self.bounds)), dtype=float)
-            except Exception:  # no reference for this point: never a candidate
-                values = None
-            self.memo[key] = values
-        values = self.memo[key]
-        return values if values is not None else np.full(self._outputs(), np.nan)
+    def _plan(self, unit: np.ndarray) -> None:
+        """Plan `b x d` unit points into the memo (None for a point without a plan)."""
+        try:
+            values = np.asarray(self.score(from_unit(unit, self.bounds)), dtype=float)
+        except Exception:  # no reference for some point: find which, alone
+            if len(unit) > 1:
+                for point in unit:
+                    self._plan(point[None])
+                return
+            values = None
+        for index, point in enumerate(unit):
+            self.memo[point.tobytes()] = None if values is None else values[index]
 
     def _outputs(self) -> int:
         known = next((values for values in self.memo.values() if values is not None), None)
