@@ -58,7 +58,8 @@ def retrieve(
 
     Args:
         model: a fitted (possibly modified) HSMM or TP-HSMM.
-        duration: seconds to retrieve (default: the model's expected duration).
+        duration: seconds to retrieve (default: the model's expected duration, to the nearest
+            multiple of its sample period).
         rate: samples per second of the result (default: the model's own rate).
         control_cost: weight r of the acceleration cost R = r I.
         poses: for a TP-HSMM, the pose of every frame but `base` (see `TPHSMM.at`).
@@ -86,7 +87,7 @@ def retrieve_batch(
 
     Args:
         models: N fitted HSMMs or TP-HSMMs.
-        durations: N seconds to retrieve (None, or a None entry: the model's expected duration).
+        durations: N seconds to retrieve (None, or a None entry: as `retrieve`'s default).
         rate, control_cost, poses: as in `retrieve`, for every model.
     """
     durations = [None] * len(models) if durations is None else list(durations)
@@ -117,7 +118,9 @@ def _tracking(model: HSMM, duration: float | None, rate: float | None, control_c
     """The tracking problem of retrieving `model` for `duration` seconds (None: its expected
     duration) at `rate`, its `T` state sequence and the duration."""
     dt = model.sample_period_
-    duration = model.expected_duration() if duration is None else float(duration)
+    # By default the expected duration on the model's own time grid, so that the skill lasts as
+    # long at every rate (retrieved at the model's rate, or executed at the simulation's).
+    duration = dt * round(model.expected_duration() / dt) if duration is None else float(duration)
     problem = samples_problem(duration, 1.0 / dt) or (samples_problem(duration, float(rate)) if rate is not None else "")
     if problem:
         raise ModelError(f"cannot retrieve the skill: {problem}")
