@@ -68,8 +68,8 @@ VARIANTS = {
     "lag": ImperfectRobot(lag=0.3, sag=(0.0, 0.0, -0.01)),  # the suite's first robot (LaggingBackend)
     "slowlag": ImperfectRobot(lag=0.2),
     "sag": ImperfectRobot(sag=(0.0, 0.0, -0.015)),
-    "speed": ImperfectRobot(lag=0.05, speed_limit=0.12),
-    "accel": ImperfectRobot(lag=0.05, acceleration_limit=0.15),
+    "speed": ImperfectRobot(lag=0.05, speed_limit=0.2),
+    "accel": ImperfectRobot(lag=0.1, acceleration_limit=1.5),
     "slow": ImperfectRobot(clock=0.8),
     "fast": ImperfectRobot(clock=1.1),
     "offset": ImperfectRobot(offset=(0.006, -0.005, 0.004)),

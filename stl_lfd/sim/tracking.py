@@ -6,13 +6,15 @@ this from pairs of (reference, executed positions) and predicts the execution of
 reference, so that a plan can be scored by what the robot will do rather than by what it was
 told. Per axis, the prediction is
 
-    executed(t) = sum_i w_i * lag_i(reference(clock * t)) + offset
+    executed(t) - start = sum_i w_i * lag_i(reference(clock * t) - start) + offset
 
-where `lag_i` are first-order low-pass filters of fixed time constants (`LAGS`, the first the
-identity), so that any stable lag is a linear least-squares fit, and `clock` (the reference's
-seconds per executed second) is found by a one-dimensional search. Among the plan itself, the
+where `start` is the reference's first position, `lag_i` are first-order low-pass filters of
+fixed time constants (`LAGS`, the first the identity) starting at rest, so that any stable lag
+is a linear least-squares fit, and `clock` (the reference's seconds per executed second) is
+found by a one-dimensional search. Among the plan itself, the
 plan plus an offset, the filter bank, and the filter bank on a warped clock, `fit` keeps the one
-that predicts held-out executions best (leave one execution out), and records its error there
+that predicts held-out executions best (leave one execution out, from each execution's normal
+equations; the clock is searched on all of them), and records its error there
 (`heldout_rms_`), the model's uncertainty.
 """
 
@@ -70,11 +72,12 @@ class TrackingModel:
         """Choose and fit the kind that predicts held-out executions best."""
         if not executions:
             raise ValueError("a tracking model needs at least one execution")
-        errors = {kind: _heldout_errors(kind, executions) for kind in KINDS}
-        self.kind_ = min(KINDS, key=lambda kind: float(np.sum(errors[kind] ** 2)))
-        fitted = _fit(self.kind_, executions)
-        self.clock_, self.weights_, self.offsets_ = fitted.clock_, fitted.weights_, fitted.offsets_
-        self.heldout_rms_, self.plan_rms_ = errors[self.kind_], errors["plan"]
+        clocks = {"plan": 1.0, "offset": 1.0, "filter": 1.0, "clocked filter": _best_clock(executions)}
+        fits = {kind: _Fit(kind, executions, clocks[kind]) for kind in KINDS}
+        self.kind_ = min(KINDS, key=lambda kind: float(np.sum(fits[kind].heldout_rms ** 2)))
+        chosen = fits[self.kind_]
+        self.clock_, self.weights_, self.offsets_ = chosen.clock, chosen.weights, chosen.offsets
+        self.heldout_rms_, self.plan_rms_ = chosen.heldout_rms, fits["plan"].heldout_rms
         self.executions_ = len(executions)
         return self
 
@@ -84,8 +87,8 @@ class TrackingModel:
         positions = np.asarray(reference_positions, dtype=float)
         if positions.ndim == 3:
             return np.stack([self.predict(reference_times, batch, times) for batch in positions])
-        bank = _filter_bank(reference_times, positions, times, self.clock_)  # T x 3 x L
-        return np.einsum("tal,al->ta", bank, self.weights_) + self.offsets_
+        bank = _filter_bank(reference_times, positions, times, self.clock_)  # T x 3 x L, from the start
+        return positions[0] + np.einsum("tal,al->ta", bank, self.weights_) + self.offsets_
 
     def to_dict(self) -> dict:
         """Plain values, for JSON."""
@@ -120,71 +123,93 @@ def _identity_weights() -> np.ndarray:
 
 
 def _filter_bank(reference_times: np.ndarray, positions: np.ndarray, times: np.ndarray, clock: float) -> np.ndarray:
-    """`T x 3 x L`: the reference read at `clock * times` (held at its ends), through each lag."""
-    warped = np.column_stack([np.interp(clock * times, reference_times, positions[:, axis]) for axis in range(3)])
+    """`T x 3 x L`: the reference read at `clock * times` (held at its ends), less its first
+    position, through each lag (starting at rest)."""
+    warped = np.column_stack([np.interp(clock * times, reference_times, positions[:, axis] - positions[0, axis]) for axis in range(3)])
     period = float(times[1] - times[0]) if times.size > 1 else 1.0
-    start = warped[:1]
     bank = np.empty(warped.shape + (len(LAGS),))
     for index, lag in enumerate(LAGS):
-        if lag == 0.0:
-            bank[..., index] = warped
-            continue
-        keep = np.exp(-period / lag)
-        bank[..., index] = lfilter([1 - keep], [1, -keep], warped - start, axis=0) + start  # starts at rest
+        keep = np.exp(-period / lag) if lag > 0 else 0.0
+        bank[..., index] = lfilter([1 - keep], [1, -keep], warped, axis=0) if lag > 0 else warped
     return bank
 
 
-def _fit(kind: str, executions: list[Execution]) -> TrackingModel:
-    """`kind` fitted by least squares on all of `executions`."""
-    if kind == "plan":
-        return TrackingModel()
-    clock = _best_clock(executions) if kind == "clocked filter" else 1.0
-    weights, offsets, _ = _fit_at_clock(executions, clock, filters=kind != "offset")
-    return TrackingModel(kind_=kind, clock_=clock, weights_=weights, offsets_=offsets)
+class _Fit:
+    """One kind fitted by least squares at one clock, on all executions (`weights`, `offsets`)
+    and leaving each out in turn (`heldout_rms`: `3` RMS errors per axis; in-sample with one
+    execution), from each execution's normal equations."""
+
+    def __init__(self, kind: str, executions: list[Execution], clock: float) -> None:
+        self.clock = clock
+        equations = [_normal_equations(kind, execution, clock) for execution in executions]  # each: 3 x (G, b, c, n)
+        self.weights, self.offsets = _identity_weights(), np.zeros(3)
+        squared, count = np.zeros(3), sum(len(execution.times) for execution in executions)
+        for axis in range(3):
+            per_execution = [equation[axis] for equation in equations]
+            gram, moment = sum(e[0] for e in per_execution), sum(e[1] for e in per_execution)
+            solution = _solve(gram, moment)
+            self._store(kind, axis, solution)
+            for own_gram, own_moment, own_square, _ in per_execution:
+                held = _solve(gram - own_gram, moment - own_moment) if len(executions) > 1 else solution
+                squared[axis] += max(own_square - 2 * held @ own_moment + held @ own_gram @ held, 0.0)
+        self.heldout_rms = np.sqrt(squared / count)
+
+    def _store(self, kind: str, axis: int, solution: np.ndarray) -> None:
+        if kind == "offset":
+            self.offsets[axis] = solution[0]
+        elif kind in ("filter", "clocked filter"):
+            self.weights[axis], self.offsets[axis] = solution[:-1], solution[-1]
+
+
+def _normal_equations(kind: str, execution: Execution, clock: float) -> list[tuple[np.ndarray, np.ndarray, float, int]]:
+    """Per axis, `(D'D, D'y, y'y, T)` of `kind`'s least-squares problem `D w = y` on one
+    execution: y the execution relative to the reference's start, less the reference itself
+    where the reference passes through unweighted (plan, offset)."""
+    bank = _filter_bank(execution.reference_times, execution.reference_positions, execution.times, clock)
+    relative = execution.positions - execution.reference_positions[0]
+    equations = []
+    for axis in range(3):
+        features = bank[:, axis, :]
+        if kind in ("filter", "clocked filter"):
+            design, target = np.column_stack([features, np.ones(len(features))]), relative[:, axis]
+        else:
+            columns = 1 if kind == "offset" else 0
+            design, target = np.ones((len(features), columns)), relative[:, axis] - features[:, 0]
+        equations.append((design.T @ design, design.T @ target, float(target @ target), len(target)))
+    return equations
+
+
+def _solve(gram: np.ndarray, moment: np.ndarray) -> np.ndarray:
+    """The least-squares weights of normal equations (lags that carry nothing get none)."""
+    if gram.size == 0:
+        return np.zeros(0)
+    return np.linalg.lstsq(gram, moment, rcond=1e-13)[0]
 
 
 def _best_clock(executions: list[Execution]) -> float:
-    """The clock whose filter-bank fit leaves the least residual: the best of a coarse grid,
-    then a bounded scalar search around it."""
+    """The clock whose filter-bank fit leaves the least residual on all executions: the best of
+    a coarse grid, then a bounded scalar search around it."""
     from scipy.optimize import minimize_scalar
 
-    residual = lambda clock: _fit_at_clock(executions, clock, filters=True)[2]  # noqa: E731
+    def residual(clock: float) -> float:
+        return _in_sample(executions, clock)
+
     coarse = min(CLOCKS, key=residual)
     step = CLOCKS[1] - CLOCKS[0]
     found = minimize_scalar(residual, bounds=(coarse - step, coarse + step), method="bounded", options={"xatol": 1e-4})
     return float(found.x) if found.fun < residual(coarse) else float(coarse)
 
 
-def _fit_at_clock(executions: list[Execution], clock: float, filters: bool) -> tuple[np.ndarray, np.ndarray, float]:
-    """`3 x L` least-squares weights and `3` offsets at `clock` (the identity lag and an offset
-    only, without `filters`), and the sum of squared residuals."""
-    banks = [_filter_bank(e.reference_times, e.reference_positions, e.times, clock) for e in executions]
-    lags = len(LAGS) if filters else 1
-    weights, offsets, residual = _identity_weights(), np.zeros(3), 0.0
+def _in_sample(executions: list[Execution], clock: float) -> float:
+    """The filter bank's sum of squared residuals at `clock`, fitted on all `executions`."""
+    equations = [_normal_equations("filter", execution, clock) for execution in executions]
+    total = 0.0
     for axis in range(3):
-        features = np.concatenate([bank[:, axis, :lags] for bank in banks])
-        target = np.concatenate([e.positions[:, axis] for e in executions])
-        if filters:
-            design = np.column_stack([features, np.ones(len(target))])
-            solution, *_ = np.linalg.lstsq(design, target, rcond=None)
-            weights[axis, :lags], offsets[axis] = solution[:lags], solution[lags]
-        else:
-            offsets[axis] = float(np.mean(target - features[:, 0]))
-        residual += float(np.sum((target - features @ weights[axis, :lags] - offsets[axis]) ** 2))
-    return weights, offsets, residual
-
-
-def _heldout_errors(kind: str, executions: list[Execution]) -> np.ndarray:
-    """`3` RMS errors per axis of `kind` predicting each execution fitted without it (in-sample
-    with one execution)."""
-    squared, count = np.zeros(3), 0
-    for index, execution in enumerate(executions):
-        others = executions[:index] + executions[index + 1 :] or executions
-        model = _fit(kind, others)
-        predicted = model.predict(execution.reference_times, execution.reference_positions, execution.times)
-        squared += np.sum((predicted - execution.positions) ** 2, axis=0)
-        count += len(execution.times)
-    return np.sqrt(squared / count)
+        gram, moment = sum(e[axis][0] for e in equations), sum(e[axis][1] for e in equations)
+        square = sum(e[axis][2] for e in equations)
+        solution = _solve(gram, moment)
+        total += max(square - 2 * solution @ moment + solution @ gram @ solution, 0.0)
+    return total
 
 
 class PredictingBackend(KinematicBackend):
