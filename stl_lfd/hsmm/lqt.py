@@ -92,7 +92,7 @@ def solve_batch(A: np.ndarray, B: np.ndarray, problems: Sequence[Tracking]) -> l
     """Optimal trajectories (`T_i x n` each, starting at x0) of N tracking problems with the
     same dynamics, vectorised over the problems.
 
-    Each problem's gains come from its segments' recursions (`_segment_recursion`, shared by
+    Each problem's gains come from its segments' recursions (`_segment_recursions`, shared by
     the problems that meet the same segments); the feedforward recursion and the trajectory
     then run for all problems at once, a step at a time. Problems are aligned at their ends:
     before a shorter one starts, its rows hold x0. Each problem's arithmetic is the same in any
@@ -100,7 +100,7 @@ def solve_batch(A: np.ndarray, B: np.ndarray, problems: Sequence[Tracking]) -> l
     """
     table = _GainTable(A, B)
     steps = max(problem.segment_ids.size for problem in problems)
-    rows, firsts = (np.stack(arrays) for arrays in zip(*(table.rows(problem, steps) for problem in problems)))  # N x (steps - 1)
+    rows, firsts = table.rows(problems, steps)  # N x (steps - 1) each
     weighted = np.stack([_weighted_targets(problem, steps) for problem in problems])  # N x steps x n
     gains, feeds, closed, settled = table.arrays()
     offsets = _feedforward(feeds, closed, settled, rows, firsts, weighted)
@@ -119,26 +119,31 @@ class _GainTable:
         self.first: dict[int, int] = {id(self.parts[0]): 0}  # a recursion's first row
         self.size = 1
 
-    def rows(self, problem: Tracking, steps: int) -> tuple[np.ndarray, np.ndarray]:
-        """The table row of each of the problem's steps but the last, and the first step of the
-        segment each is in, aligned at the end of `steps` (`steps - 1` each; row 0 and first
-        step 0 before the problem starts). The segments are walked backwards, each entered
-        with the P its successor ends with."""
-        ids, Q = problem.segment_ids, problem.Q
-        rows, firsts = np.zeros(steps - 1, dtype=np.intp), np.zeros(steps - 1, dtype=np.intp)
-        offset = steps - ids.size
-        P = Q[ids[-1]]
-        t = ids.size - 2
-        while t >= 0:
-            first = t
-            while first > 0 and ids[first - 1] == ids[t]:
-                first -= 1
-            recursion = _segment_recursion(self.A, self.B, problem.R, Q[ids[t]], P, t - first + 1)
-            last = len(recursion.gains) - 1
-            rows[offset + first : offset + t + 1] = self._first_row(recursion) + np.minimum(np.arange(t - first, -1, -1), last)
-            firsts[offset + first : offset + t + 1] = offset + first
-            P = recursion.values[min(t - first, last)]
-            t = first - 1
+    def rows(self, problems: Sequence[Tracking], steps: int) -> tuple[np.ndarray, np.ndarray]:
+        """The table row of each of the problems' steps but the last, and the first step of
+        the segment each is in, aligned at the end of `steps` (`N x (steps - 1)` each; row 0
+        and first step 0 before a problem starts).
+
+        Each problem's segments are walked backwards, each entered with the P its successor
+        ends with: all problems' last segments first, then the ones before them, so that the
+        recursions none has met yet are computed together (`_segment_recursions`).
+        """
+        rows, firsts = np.zeros((len(problems), steps - 1), dtype=np.intp), np.zeros((len(problems), steps - 1), dtype=np.intp)
+        ends = {index: problem.segment_ids.size - 2 for index, problem in enumerate(problems)}  # the next step to walk
+        segment_starts = [_segment_starts(problem.segment_ids) for problem in problems]
+        entering = {index: problem.Q[problem.segment_ids[-1]] for index, problem in enumerate(problems)}
+        while ends := {index: t for index, t in ends.items() if t >= 0}:
+            starts = {index: int(segment_starts[index][t]) for index, t in ends.items()}
+            requests = [
+                (problems[index].R, problems[index].Q[problems[index].segment_ids[t]], entering[index], t - starts[index] + 1) for index, t in ends.items()
+            ]
+            for (index, t), recursion in zip(ends.items(), _segment_recursions(self.A, self.B, requests)):
+                first, offset = starts[index], steps - problems[index].segment_ids.size
+                last = len(recursion.gains) - 1
+                rows[index, offset + first : offset + t + 1] = self._first_row(recursion) + np.minimum(np.arange(t - first, -1, -1), last)
+                firsts[index, offset + first : offset + t + 1] = offset + first
+                entering[index] = recursion.values[min(t - first, last)]
+                ends[index] = first - 1
         return rows, firsts
 
     def _first_row(self, recursion: "_SegmentRecursion") -> int:
@@ -251,39 +256,59 @@ _RECURSIONS: OrderedDict[bytes, _SegmentRecursion] = OrderedDict()
 _RECURSIONS_KEPT = 512
 
 
-def _segment_recursion(A: np.ndarray, B: np.ndarray, R: np.ndarray, Q: np.ndarray, P: np.ndarray, length: int) -> _SegmentRecursion:
-    """The recursion of a segment of `length` steps with state cost `Q`, entered with `P`:
-    until P is unchanged or for `length` steps."""
-    key = b"".join(np.ascontiguousarray(matrix).tobytes() for matrix in (A, B, R, Q, P))
-    known = _RECURSIONS.get(key)
-    if known is not None and (known.converged or len(known.gains) >= length):
-        _RECURSIONS.move_to_end(key)
-        return known
+def _segment_recursions(A: np.ndarray, B: np.ndarray, requests: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray, int]]) -> list[_SegmentRecursion]:
+    """The recursion of each segment `(R, Q, P, length)` (state cost Q, entered with P): until
+    P is unchanged or for `length` steps. The kept ones are reused; the others are computed
+    together, a step at a time for all of them (each with the arithmetic it has alone)."""
+    keys = [b"".join(np.ascontiguousarray(matrix).tobytes() for matrix in (A, B, R, Q, P)) for R, Q, P, _ in requests]
+    needed: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray, int]] = {}
+    for key, (R, Q, P, length) in zip(keys, requests):
+        known = _RECURSIONS.get(key)
+        if known is not None and (known.converged or len(known.gains) >= length):
+            _RECURSIONS.move_to_end(key)
+        elif key not in needed or needed[key][3] < length:
+            needed[key] = (R, Q, P, length)
+    if needed:
+        for key, recursion in zip(needed, _recursions(A, B, list(needed.values()))):
+            _RECURSIONS[key] = recursion
+            if len(_RECURSIONS) > _RECURSIONS_KEPT:
+                _RECURSIONS.popitem(last=False)
+    return [_RECURSIONS[key] if key in _RECURSIONS else _recursions(A, B, [request])[0] for key, request in zip(keys, requests)]
+
+
+def _recursions(A: np.ndarray, B: np.ndarray, requests: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray, int]]) -> list[_SegmentRecursion]:
+    """The Riccati recursions of K segments `(R, Q, P, length)`, stepped together until each
+    one's P is unchanged or it has `length` steps."""
     n = A.shape[0]
-    gains, feeds, closed_loops, values = [], [], [], []
-    converged = False
-    while len(gains) < length and not converged:
-        PB = P @ B
-        solution = np.linalg.solve(R + B.T @ PB, np.hstack([PB.T @ A, B.T]))  # m x 2n
-        gain = solution[:, :n]
+    R, Q, P = (np.stack([request[k] for request in requests]) for k in range(3))  # K x . x .
+    lengths = np.array([request[3] for request in requests])
+    steps: list[list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = [[] for _ in requests]
+    converged = np.zeros(len(requests), dtype=bool)
+    active = np.arange(len(requests))
+    right = np.empty((len(requests), B.shape[1], 2 * n))
+    right[:, :, n:] = B.T
+    while active.size:
+        current = P[active]
+        PB = current @ B
+        right[active, :, :n] = PB.transpose(0, 2, 1) @ A
+        solution = np.linalg.solve(R[active] + B.T @ PB, right[active])  # k x m x 2n
+        gain = solution[:, :, :n]
         closed = A - B @ gain
-        P_next = Q + A.T @ P @ closed
-        P_next = 0.5 * (P_next + P_next.T)  # rounding makes P drift from symmetry, then diverge
-        converged = _unchanged(P_next, P)
-        gains.append(gain)
-        feeds.append(solution[:, n:])
-        closed_loops.append(closed)
-        values.append(P_next)
-        P = P_next
-    recursion = _SegmentRecursion(np.array(gains), np.array(feeds), np.array(closed_loops), np.array(values), converged)
-    _RECURSIONS[key] = recursion
-    if len(_RECURSIONS) > _RECURSIONS_KEPT:
-        _RECURSIONS.popitem(last=False)
-    return recursion
+        following = Q[active] + A.T @ current @ closed
+        following = 0.5 * (following + following.transpose(0, 2, 1))  # rounding makes P drift from symmetry, then diverge
+        converged[active] = _unchanged_rows(following, current)
+        for position, index in enumerate(active):
+            steps[index].append((gain[position], solution[position, :, n:], closed[position], following[position]))
+        P[active] = following
+        active = active[(np.array([len(steps[index]) for index in active]) < lengths[active]) & ~converged[active]]
+    return [_SegmentRecursion(*(np.array(part) for part in zip(*taken)), bool(done)) for taken, done in zip(steps, converged)]
 
 
-def _unchanged(new: np.ndarray, old: np.ndarray) -> bool:
-    return float(np.max(np.abs(new - old))) <= _CONVERGED * (1.0 + float(np.max(np.abs(old))))
+def _segment_starts(ids: np.ndarray) -> np.ndarray:
+    """`T`: the first step of each step's segment (a run of equal `ids`)."""
+    opens = np.ones(ids.size, dtype=bool)
+    opens[1:] = ids[1:] != ids[:-1]
+    return np.maximum.accumulate(np.where(opens, np.arange(ids.size), 0))
 
 
 def _unchanged_rows(new: np.ndarray, old: np.ndarray) -> np.ndarray:
