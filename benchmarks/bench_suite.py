@@ -14,7 +14,8 @@ prints the table of what is recorded. `--search N` runs N uniform random points 
 (the large-budget check that a satisfying point exists) into `results/search.jsonl`.
 
 `PROBLEM+lag` runs a kinematic problem with a robot's tracking error (`LaggingBackend`), so
-that the execution is not the plan that method `plan` scores.
+that the execution is not the plan that method `plan` scores; `PROBLEM+VARIANT` with a robot of
+`benchmarks.robots.VARIANTS` (slowlag, sag, speed, accel, slow, fast, offset, noise, robot).
 """
 
 from __future__ import annotations
@@ -40,7 +41,10 @@ ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS_DIR = ROOT / "benchmarks" / "problems"
 RESULTS = ROOT / "benchmarks" / "results" / "suite.jsonl"
 SEARCH_RESULTS = ROOT / "benchmarks" / "results" / "search.jsonl"
-METHODS = ("stl", "plan", "pi", "logei", "random", "tpe")
+METHODS = ("stl", "plan", "pi", "logei", "random", "tpe", "plan-untracked")
+# plan-untracked: method plan scoring the plan as it stands, as it did before the tracking model
+# (for the problems whose robot does not execute the plan; not run unless asked for)
+DEFAULT_METHODS = METHODS[:-1]
 TPE_STARTUP = 10  # Optuna's default n_startup_trials: random points before TPE proposes
 
 
@@ -82,6 +86,8 @@ class LaggingBackend(KinematicBackend):
     reference through a first-order lag of LAG_SECONDS and sits SAG below it. The reference
     (the plan) is unchanged, so its robustness is no longer the execution's."""
 
+    plays_the_plan = False
+
     def run(self, reference, scene, rate, observer=None):
         from scipy.signal import lfilter
 
@@ -101,23 +107,39 @@ class LaggingBackend(KinematicBackend):
 
 @contextlib.contextmanager
 def executed_as(problem: str):
-    """Within it, the tasks of `problem` execute on its backend (`+lag`: `LaggingBackend` in
-    place of the kinematic one)."""
+    """Within it, the tasks of `problem` execute on its backend in place of the kinematic one
+    (`+lag`: `LaggingBackend`; `+VARIANT`: that robot of `benchmarks.robots.VARIANTS`)."""
     import stl_lfd.optim.objective as run
+    from benchmarks.robots import VARIANTS
 
-    if not problem.endswith("+lag"):
+    variant = problem.partition("+")[2]
+    if not variant:
         yield
         return
+    robot = LaggingBackend() if variant == "lag" else VARIANTS[variant]
     original = run.new_backend
 
-    def lagging(name, command=None):
-        return LaggingBackend() if name == "kinematic" else original(name, command)
+    def imperfect(name, command=None):
+        return robot if name == "kinematic" else original(name, command)
 
-    run.new_backend = lagging
+    run.new_backend = imperfect
     try:
         yield
     finally:
         run.new_backend = original
+
+
+@contextlib.contextmanager
+def untracked():
+    """Within it, method plan scores the plan as it stands, whatever executes it."""
+    from stl_lfd.optim.objective import SkillObjective
+
+    original = SkillObjective.plays_the_plan
+    SkillObjective.plays_the_plan = property(lambda self: True)
+    try:
+        yield
+    finally:
+        SkillObjective.plays_the_plan = original
 
 
 def run_one(problem: str, method: str, seed: int) -> dict:
@@ -132,7 +154,8 @@ def run_one(problem: str, method: str, seed: int) -> dict:
             trials, initial = _run_tpe(task, seed)
         else:
             name, initial_trials = method_and_initial(method)
-            trials, initial = _run_tool(task.with_overrides(method=name, seed=seed, initial=initial_trials))
+            with untracked() if name == "plan-untracked" else contextlib.nullcontext():
+                trials, initial = _run_tool(task.with_overrides(method=name.removesuffix("-untracked"), seed=seed, initial=initial_trials))
     best_x = max((trial for trial in trials if trial["robustness"] is not None), key=lambda trial: trial["robustness"], default={}).get("x")
     robustness = [trial["robustness"] for trial in trials]
     satisfied = [trial["trial"] for trial in trials if trial["robustness"] is not None and trial["robustness"] > 0]
@@ -423,7 +446,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument(
         "--methods",
         nargs="+",
-        default=list(METHODS),
+        default=list(DEFAULT_METHODS),
         type=method_name,
         help="METHOD, METHOD/mK for K initial trials, or METHOD@LABEL (earlier code's records, with --table)",
     )

@@ -22,7 +22,7 @@ from rich.console import Console
 from rich.table import Table
 from torch.quasirandom import SobolEngine
 
-from benchmarks.bench_suite import ROOT
+from benchmarks.bench_suite import ROOT, LaggingBackend
 from benchmarks.robots import VARIANTS
 from stl_lfd.optim import load_task
 from stl_lfd.optim.objective import objective_for, task_models
@@ -82,7 +82,8 @@ def main(argv: list[str] | None = None) -> None:
     arguments = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     rows = [row(f"{name}, PyBullet", executions(name, arguments.points), PYBULLET_TARGET, None) for name in ("phi1", "phi2")]
-    for variant, robot in VARIANTS.items():
+    robots = {"lag": LaggingBackend(), **VARIANTS}
+    for variant, robot in robots.items():
         rows.append(row(f"phi1+{variant}", executions("phi1", arguments.points, robot), None, None if variant == "noise" else ROBOT_RATIO_TARGET))
     table = Table(title="Tracking model: held-out prediction of an execution against the plan's", title_justify="left")
     for column in ("case", "executions", "model", "held-out RMS (mm)", "plan RMS (mm)", "ratio", "target", "", "fit"):

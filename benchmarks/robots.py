@@ -34,6 +34,7 @@ class ImperfectRobot(KinematicBackend):
     seed: int = 0
 
     name = "kinematic"
+    plays_the_plan = False
 
     def run(self, reference, scene, rate, observer=None) -> Rollout:
         rollout = super().run(reference, scene, rate, observer)
@@ -65,7 +66,6 @@ class ImperfectRobot(KinematicBackend):
 
 
 VARIANTS = {
-    "lag": ImperfectRobot(lag=0.3, sag=(0.0, 0.0, -0.01)),  # the suite's first robot (LaggingBackend)
     "slowlag": ImperfectRobot(lag=0.2),
     "sag": ImperfectRobot(sag=(0.0, 0.0, -0.015)),
     "speed": ImperfectRobot(lag=0.05, speed_limit=0.2),

@@ -20,6 +20,7 @@ from stl_lfd.optim.trials import Outcome
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim import Backend, CommandBackend, Reference, Scene, load_scene, new_backend
+from stl_lfd.sim.tracking import TrackingModel
 from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour
 from stl_lfd.skill.placed import PlacedSkill, placed_scene
 from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
@@ -50,6 +51,11 @@ class SkillObjective:
         if self.backend is not None:
             self.backend.close()
 
+    @property
+    def plays_the_plan(self) -> bool:
+        """Whether executions are the plan itself (the kinematic backend): no tracking to learn."""
+        return bool(getattr(self.backend, "plays_the_plan", False))
+
     def exchange_in(self, folder: Path) -> None:
         """Write the command backend's exchange folders in `folder` (the run directory)."""
         if isinstance(self.backend, CommandBackend):
@@ -58,19 +64,21 @@ class SkillObjective:
     def __call__(self, x: np.ndarray, trial: int = 0) -> Outcome:
         return self.evaluate(self.space.apply(self.models, x), trial)
 
-    def planned(self) -> "SkillObjective":
-        """This objective on the kinematic backend: it scores the plan (the reference itself)."""
+    def planned(self, tracking: TrackingModel | None = None) -> "SkillObjective":
+        """This objective on the kinematic backend: it scores the plan (the reference itself),
+        or with `tracking` the plan's execution as the tracking model predicts it."""
         from stl_lfd.sim.kinematic import KinematicBackend
+        from stl_lfd.sim.tracking import PredictingBackend
 
         plan = copy.copy(self)
-        plan.backend = KinematicBackend()
+        plan.backend = KinematicBackend() if tracking is None else PredictingBackend(tracking)
         return plan
 
-    def plan_score(self) -> Callable[[np.ndarray], np.ndarray]:
+    def plan_score(self, tracking: TrackingModel | None = None) -> Callable[[np.ndarray], np.ndarray]:
         """`b x d` points -> `b x o`: the plan's robustness of each part, then route, at each
-        point (the prior of method `plan`), the points' plans retrieved together; raises when
-        a point has no plan."""
-        planned, routes = self.planned(), self.composition.route_names
+        point (the prior of method `plan`), the points' plans retrieved together (and, with
+        `tracking`, executed as it predicts); raises when a point has no plan."""
+        planned, routes = self.planned(tracking), self.composition.route_names
 
         def score(points: np.ndarray) -> np.ndarray:
             outcomes = planned.evaluate_all([self.space.apply(self.models, x) for x in points])

@@ -22,6 +22,7 @@ from stl_lfd.sim.scene import Scene
 
 class KinematicBackend:
     name = "kinematic"
+    plays_the_plan = True  # what it records is the reference (subclasses that depart from it say not)
 
     def run(self, reference: Reference, scene: Scene, rate: float, observer: Callable | None = None) -> Rollout:
         """Sample `reference` at `rate`; `observer` is not called (there is no world to film)."""

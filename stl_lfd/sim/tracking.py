@@ -31,7 +31,7 @@ from stl_lfd.sim.kinematic import KinematicBackend
 from stl_lfd.sim.reference import Reference, Rollout
 from stl_lfd.sim.scene import Scene
 
-LAGS = (0.0, 0.03, 0.1, 0.3, 1.0)  # seconds: time constants of the filter bank (0: the reference itself)
+LAGS = (0.0, 0.03, 0.1, 0.2, 0.3, 0.5, 1.0)  # seconds: time constants of the filter bank (0: the reference itself)
 CLOCKS = np.linspace(0.6, 1.4, 9)  # reference seconds per executed second: the clocked model's coarse grid
 KINDS = ("plan", "offset", "filter", "clocked filter")  # simplest first: a tie keeps the simplest
 
@@ -180,10 +180,25 @@ def _normal_equations(kind: str, execution: Execution, clock: float) -> list[tup
 
 
 def _solve(gram: np.ndarray, moment: np.ndarray) -> np.ndarray:
-    """The least-squares weights of normal equations (lags that carry nothing get none)."""
+    """The least-squares solution of normal equations `gram w = moment`. With more than one
+    unknown (the filter bank, then the offset) the filter weights are kept non-negative: a
+    mixture of lags, which is what a stable, non-overshooting servo is; unconstrained weights
+    of the (nearly collinear) lags fit the noise of a few executions with huge opposite values."""
     if gram.size == 0:
         return np.zeros(0)
-    return np.linalg.lstsq(gram, moment, rcond=1e-13)[0]
+    if len(gram) == 1:
+        return np.array([moment[0] / gram[0, 0]]) if gram[0, 0] > 0 else np.zeros(1)
+    from scipy.optimize import nnls
+
+    # The offset (last unknown) is eliminated: for given weights its best value is known.
+    lags, cross, offset_gram = gram[:-1, :-1], gram[:-1, -1], gram[-1, -1]
+    reduced = lags - np.outer(cross, cross) / offset_gram
+    reduced_moment = moment[:-1] - cross * moment[-1] / offset_gram
+    reduced += np.eye(len(reduced)) * 1e-12 * max(np.trace(reduced), 1e-300)
+    upper = np.linalg.cholesky(reduced).T  # reduced = upper' upper
+    weights, _ = nnls(upper, np.linalg.solve(upper.T, reduced_moment))
+    offset = (moment[-1] - cross @ weights) / offset_gram
+    return np.append(weights, offset)
 
 
 def _best_clock(executions: list[Execution]) -> float:
@@ -216,6 +231,8 @@ class PredictingBackend(KinematicBackend):
     """The kinematic backend with the robot's tracking: what `model` predicts a robot records
     when it executes the reference (orientations, gripper and carried frames as planned)."""
 
+    plays_the_plan = False
+
     def __init__(self, model: TrackingModel) -> None:
         self.model = model
 
@@ -224,4 +241,5 @@ class PredictingBackend(KinematicBackend):
         times, columns = planned.signals.times, dict(planned.signals.columns)
         predicted = self.model.predict(reference.times, reference.positions, times)
         columns.update(zip("xyz", predicted.T))
-        return Rollout(SignalTable(times, columns, source="predicted execution"), np.linalg.norm(predicted - reference.positions_at(times), axis=1))
+        # a prediction, not an execution: its departure from the reference is no tracking error to warn about
+        return Rollout(SignalTable(times, columns, source="predicted execution"), np.zeros(times.size))

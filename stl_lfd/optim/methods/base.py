@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Callable, ClassVar, Sequence
+from typing import TYPE_CHECKING, Callable, ClassVar, Hashable, Sequence
 
 import numpy as np
 
@@ -61,6 +61,9 @@ class Problem:
             units) -> `b x o` values, planned together; raises when a point has no plan
             (method `plan`'s prior).
         initial_design: the `M x d` Sobol points, when already computed (saves torch's import).
+        tracked_plan: history -> (key, plan): `plan` through the tracking model learned from the
+            history's executions, for a robot that does not execute the plan (None: it does);
+            the same key, the same model.
     """
 
     bounds: np.ndarray
@@ -68,6 +71,7 @@ class Problem:
     features: Callable | None = None
     plan: Callable[[np.ndarray], np.ndarray] | None = None
     initial_design: np.ndarray | None = None
+    tracked_plan: Callable[[Sequence[Trial]], tuple[Hashable, Callable[[np.ndarray], np.ndarray]]] | None = None
 
     @property
     def dimension(self) -> int:

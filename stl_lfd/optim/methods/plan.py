@@ -23,7 +23,7 @@ difference's GP learns the part from the trials.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import Hashable, Sequence
 
 import numpy as np
 import torch
@@ -78,6 +78,7 @@ class PlanSearch(SearchMethod):
             raise ValueError("method plan needs the spec's parts and the plan of a point")
         self.settings = settings
         self.plan = Plan(problem.plan, problem.bounds)
+        self._tracked: tuple[Hashable, Plan] | None = None  # the plan through the latest tracking model
 
     def propose(self, request: Request) -> list[Proposal]:
         """Each point of the batch chosen with the batch's earlier points pending too."""
@@ -97,19 +98,30 @@ class PlanSearch(SearchMethod):
         Y = np.array([trial.robustness for trial in succeeded])
         tried = np.array([trial.x for trial in request.history] + list(pending)).reshape(-1, self.problem.dimension)
         with single_threaded():
+            plan = self.plan_for(request.history)
             unit, tried = to_unit(X, bounds), to_unit(tried, bounds)
             if design and len(tried):
-                return from_unit(self.spread_point(self.pool(request.seed), tried), bounds)
+                return from_unit(self.spread_point(self.pool(request.seed), tried, plan), bounds)
             outputs = self.observed_outputs(succeeded)
-            difference = difference_posterior(unit, outputs - self.plan(unit) if len(X) else outputs, self.problem.features)
+            difference = difference_posterior(unit, outputs - plan(unit) if len(X) else outputs, self.problem.features)
             best = float(np.max(Y)) if len(Y) else -np.inf
             scale = float(np.std(Y)) if len(Y) > 1 and np.std(Y) > 0 else 1.0
-            score = Scorer(difference, self.plan, best, scale, composition, request.seed_for(index))
+            score = Scorer(difference, plan, best, scale, composition, request.seed_for(index))
             candidates, values = self.search(score, unit[np.argmax(Y, keepdims=True)] if len(Y) else unit[:0], request.seed, request.seed_for(index))
             values = np.where(within(candidates, tried, 1e-9), -np.inf, values)  # a point already executed would teach nothing new
             if len(pending):
                 values = np.where(within(candidates, to_unit(pending, bounds), self.settings.pending_spread), -np.inf, values)
         return np.clip(from_unit(candidates[int(np.argmax(values))], bounds), bounds[0], bounds[1])
+
+    def plan_for(self, history: Sequence[Trial]) -> Plan:
+        """The plan of a point as the robot will execute it: through the tracking model learned
+        from `history` (`Problem.tracked_plan`), or the plan itself where the robot executes it."""
+        if self.problem.tracked_plan is None:
+            return self.plan
+        key, score = self.problem.tracked_plan(history)
+        if self._tracked is None or self._tracked[0] != key:
+            self._tracked = (key, Plan(score, self.problem.bounds))
+        return self._tracked[1]
 
     def search(self, score: Scorer, best_trial: np.ndarray, seed: int, trial_seed: int) -> tuple[np.ndarray, np.ndarray]:
         """Candidates (`c x d`, unit cube) and their scores: the pool, then the refinement
@@ -137,12 +149,12 @@ class PlanSearch(SearchMethod):
             raise ValueError("method plan needs every trial's parts (trials.jsonl 'components')")
         return np.hstack([values, routes])
 
-    def spread_point(self, pool: np.ndarray, tried: np.ndarray) -> np.ndarray:
+    def spread_point(self, pool: np.ndarray, tried: np.ndarray, plan: Plan) -> np.ndarray:
         """The point of `pool` (`P x d`, unit cube) farthest from the `n x d` `tried` points among
-        the untried ones whose plan satisfies the spec (or, when none is left, among the best
+        the untried ones whose `plan` satisfies the spec (or, when none is left, among the best
         quarter by plan)."""
         composition = self.problem.composition
-        planned = self.plan(pool)
+        planned = plan(pool)
         samples = through_routes(torch.as_tensor(np.nan_to_num(planned, nan=-1e9)), len(composition.names), composition.route_parts)
         values = compose(samples, composition.semantics, composition.groups).numpy()
         values = np.where(np.isfinite(planned).all(axis=1), values, -np.inf)

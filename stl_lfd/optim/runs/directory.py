@@ -45,7 +45,7 @@ from stl_lfd.optim.space import build_search_space
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Task, load_task
 from stl_lfd.optim.trials import Trial, best_trial
-from stl_lfd.signals import SignalTable, write_signal_csv
+from stl_lfd.signals import SignalTable, read_signal_csv, write_signal_csv
 
 TASK_FILE = "task.yaml"
 MODEL_FILE = "model.npz"
@@ -168,6 +168,11 @@ class RunDirectory:
             stream.write(json.dumps(trial_to_json(trial)) + "\n")
             stream.flush()
             os.fsync(stream.fileno())
+
+    def recorded_signals(self, trial: int) -> SignalTable | None:
+        """The signals trial `trial` recorded (0: the unoptimised skill), None if it has none."""
+        path = self.signals_path(trial)
+        return read_signal_csv(path) if path.is_file() else None
 
     def pending(self) -> "Pending | None":
         """The trial handed out by `stlopt ask` and not told yet, if any."""

@@ -24,6 +24,7 @@ from stl_lfd.optim.runs.store import RunStore
 from stl_lfd.optim.space import SearchSpace
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Overrides, Task
+from stl_lfd.optim.tracking import RunTracking
 from stl_lfd.optim.trials import Outcome, Trial
 from stl_lfd.signals import SignalTable
 from stl_lfd.stl import ast
@@ -45,9 +46,13 @@ class PreparedRun:
 
     def problem(self, initial_design: np.ndarray | None = None) -> Problem:
         """What the search method searches: the bounds, the spec's parts, what a GP sees of a
-        point (`features.path_features`), and the plan of a point (method `plan`'s prior)."""
+        point (`features.path_features`), and the plan of a point (method `plan`'s prior), through
+        the robot's tracking model where the backend does not play the plan back."""
         features = path_features(self.space, self.models)
-        return Problem(self.space.bounds, self.objective.composition, features, self.objective.plan_score(), initial_design)
+        tracked_plan = None
+        if not self.objective.plays_the_plan and len(self.objective.placed) == 1:
+            tracked_plan = RunTracking(self.objective, self.models, self.space, self.run.recorded_signals, self.run.path).plan_score
+        return Problem(self.space.bounds, self.objective.composition, features, self.objective.plan_score(), initial_design, tracked_plan)
 
     def search_method(self, initial_design: np.ndarray | None = None) -> SearchMethod:
         return search_method(self.task.optimizer, self.problem(initial_design))

@@ -25,6 +25,8 @@ class RunStore(Protocol):
 
     def append_trial(self, trial: Trial, signals: SignalTable | None) -> None: ...
 
+    def recorded_signals(self, trial: int) -> SignalTable | None: ...
+
     def write_best_models(self, models: dict[str, HSMM]) -> None: ...
 
     def has_best_models(self) -> bool: ...
@@ -50,6 +52,10 @@ class MemoryRun:
         if signals is not None:
             self.signals[trial.trial] = signals
 
+    def recorded_signals(self, trial: int) -> SignalTable | None:
+        """The signals trial `trial` recorded (0: the unoptimised skill), None if it has none."""
+        return self.signals.get(trial)
+
     def write_best_models(self, models: dict[str, HSMM]) -> None:
         self.best_models = models
 
@@ -74,6 +80,10 @@ class RecordedRun(MemoryRun):
     def append_trial(self, trial: Trial, signals: SignalTable | None) -> None:
         super().append_trial(trial, signals)
         self.disk.append_trial(trial, signals)
+
+    def recorded_signals(self, trial: int) -> SignalTable | None:
+        """As the run directory holds them, as a resumed run reads them."""
+        return self.disk.recorded_signals(trial)
 
     def write_best_models(self, models: dict[str, HSMM]) -> None:
         super().write_best_models(models)

@@ -1,0 +1,89 @@
+"""A run's tracking model: how its robot followed the references of the trials executed so far
+(`stl_lfd.sim.tracking`), so that method `plan` scores a candidate by its predicted execution.
+
+The executions are the unoptimised skill's and the finished trials': each trial's reference is
+rebuilt from its point (the plan is a pure function of the point) and its positions are read
+from the run directory, so that a resumed run fits the same models and proposes the same points.
+The latest model is kept in `tracking.json` for the report and the API.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from stl_lfd.files import write_atomically
+from stl_lfd.hsmm import HSMM
+from stl_lfd.optim.objective import SkillObjective
+from stl_lfd.optim.space import SearchSpace
+from stl_lfd.optim.trials import Trial
+from stl_lfd.signals import SignalTable
+from stl_lfd.sim.tracking import Execution, TrackingModel
+
+TRACKING_FILE = "tracking.json"
+
+
+class RunTracking:
+    """The tracking models of a run, one per set of executed trials.
+
+    Args:
+        objective, models, space: the run's, to rebuild a trial's reference from its point.
+        recorded_signals: trial number (0: the unoptimised skill) -> its recorded signals, or
+            None (`RunStore.recorded_signals`).
+        folder: where `tracking.json` is written (None: nowhere).
+    """
+
+    def __init__(
+        self, objective: SkillObjective, models: dict[str, HSMM], space: SearchSpace, recorded_signals: Callable[[int], SignalTable | None], folder: Path | None
+    ) -> None:
+        self.objective, self.models, self.space = objective, models, space
+        self.recorded_signals, self.folder = recorded_signals, folder
+        self._executions: dict[int, Execution | None] = {}
+        self._latest: tuple[tuple[int, ...], TrackingModel] | None = None
+
+    def model(self, history: Sequence[Trial]) -> tuple[tuple[int, ...], TrackingModel]:
+        """The model fitted on the unoptimised skill's execution and those of `history`'s
+        successful trials, and the trial numbers it was fitted on (its identity)."""
+        numbers = tuple(
+            number for number in [0, *(trial.trial for trial in history if trial.robustness is not None)] if self._execution(number, history) is not None
+        )
+        if self._latest is None or self._latest[0] != numbers:
+            model = TrackingModel().fit([self._executions[number] for number in numbers]) if numbers else TrackingModel()
+            self._latest = (numbers, model)
+            self._write(numbers, model)
+        return self._latest
+
+    def plan_score(self, history: Sequence[Trial]) -> tuple[tuple[int, ...], Callable[[np.ndarray], np.ndarray]]:
+        """The plan score (`SkillObjective.plan_score`) through the model of `history`, and the
+        model's identity (the same identity, the same score)."""
+        numbers, model = self.model(history)
+        return numbers, self.objective.plan_score(model)
+
+    def _execution(self, number: int, history: Sequence[Trial]) -> Execution | None:
+        if number not in self._executions:
+            x = self.space.initial if number == 0 else next(trial.x for trial in history if trial.trial == number)
+            signals = self.recorded_signals(number)
+            self._executions[number] = execution_of(self.objective, self.space.apply(self.models, x), signals) if signals is not None else None
+        return self._executions[number]
+
+    def _write(self, numbers: tuple[int, ...], model: TrackingModel) -> None:
+        if self.folder is not None:
+            write_atomically(self.folder / TRACKING_FILE, json.dumps({"trials": list(numbers), **model.to_dict()}, indent=2) + "\n")
+
+
+def execution_of(objective: SkillObjective, models: dict[str, HSMM], signals: SignalTable) -> Execution:
+    """The reference of `models` (at the first placement) and the positions `signals` recorded."""
+    reference = objective.reference(models)
+    return Execution(reference.times, reference.positions, signals.times, np.column_stack([signals.columns[axis] for axis in "xyz"]))
+
+
+def read_tracking(folder: Path) -> tuple[list[int], TrackingModel] | None:
+    """The trial numbers and the tracking model in `folder/tracking.json`, if the run has one."""
+    path = Path(folder) / TRACKING_FILE
+    if not path.is_file():
+        return None
+    data = json.loads(path.read_text())
+    return list(data["trials"]), TrackingModel.from_dict(data)

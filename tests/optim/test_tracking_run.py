@@ -1,0 +1,72 @@
+"""Method plan through the tracking model: a run on a robot that lags and sags behind its
+references learns how it tracks (kept in tracking.json), a resumed run proposes what an
+uninterrupted one did, and a backend that plays the plan back learns nothing."""
+
+import json
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+import stl_lfd.optim.objective as objective_module
+from stl_lfd.optim import finish_run, load_task, resume_run, start_run
+from stl_lfd.optim.tracking import TRACKING_FILE, read_tracking
+from stl_lfd.signals import SignalTable
+from stl_lfd.sim.kinematic import KinematicBackend
+from stl_lfd.sim.reference import Rollout
+from tests.optim.test_run import small_task
+
+LAG, SAG = 0.25, 0.012  # s, m
+
+
+class SaggingRobot(KinematicBackend):
+    """Follows the reference through a first-order lag and sits SAG below it."""
+
+    plays_the_plan = False
+
+    def run(self, reference, scene, rate, observer=None):
+        rollout = super().run(reference, scene, rate, observer)
+        columns = dict(rollout.signals.columns)
+        keep = np.exp(-1 / (rate * LAG))
+        for name in "xyz":
+            start = columns[name][0]
+            columns[name] = lfilter([1 - keep], [1, -keep], columns[name] - start) + start - (SAG if name == "z" else 0.0)
+        return Rollout(SignalTable(rollout.signals.times, columns, source="sagging robot"), rollout.tracking_error)
+
+
+@pytest.fixture
+def sagging(monkeypatch):
+    original = objective_module.new_backend
+    monkeypatch.setattr(objective_module, "new_backend", lambda name, command=None: SaggingRobot() if name == "kinematic" else original(name, command))
+
+
+def plan_task(tmp_path, learned_model_file, trials):
+    task = load_task(small_task(tmp_path, learned_model_file))
+    return task.with_overrides(method="plan", initial=2, trials=trials, seed=5)
+
+
+def trial_points(folder):
+    return [json.loads(line)["x"] for line in (folder / "trials.jsonl").read_text().splitlines()]
+
+
+@pytest.mark.slow
+def test_a_sagging_robot_is_learned_and_a_resumed_run_proposes_the_same(tmp_path, learned_model_file, sagging):
+    whole = tmp_path / "whole"
+    finish_run(start_run(plan_task(tmp_path, learned_model_file, 4), whole))
+    trials, model = read_tracking(whole)
+    assert trials == [0, 1, 2, 3]  # the unoptimised skill and the trials before the last proposal
+    assert model.kind_ in ("offset", "filter", "clocked filter")
+    assert model.offsets_[2] == pytest.approx(-SAG, abs=1e-3)
+    assert np.all(model.heldout_rms_ < 0.2 * model.plan_rms_)
+
+    halves = tmp_path / "halves"
+    finish_run(start_run(plan_task(tmp_path, learned_model_file, 3), halves))
+    finish_run(resume_run(halves, trials=4))
+    assert np.allclose(trial_points(halves), trial_points(whole), rtol=0, atol=1e-12)
+
+
+@pytest.mark.slow
+def test_a_backend_that_plays_the_plan_learns_no_tracking(tmp_path, learned_model_file):
+    folder = tmp_path / "run"
+    finish_run(start_run(plan_task(tmp_path, learned_model_file, 3), folder))
+    assert not (folder / TRACKING_FILE).exists()
