@@ -185,6 +185,7 @@ def _feedforward(feeds: np.ndarray, closed: np.ndarray, settled: np.ndarray, row
     p = weighted[:, -1]  # N x n x 1
     held = np.zeros(count, dtype=bool)  # p at its segment's fixed point
     held_any = held_all = False
+    kept = held[:, None, None]  # `held` as a mask of rows
     t = steps - 1
     for chunk in _chunks(steps, count * closed[0].size, backwards=True):
         chunk_feeds, chunk_transposed = feeds[rows[:, chunk]], transposed[rows[:, chunk]]  # N x L x . x .
@@ -193,7 +194,7 @@ def _feedforward(feeds: np.ndarray, closed: np.ndarray, settled: np.ndarray, row
                 begin = int(firsts[:, t].max())
                 offsets[:, begin : t + 1] = offsets[:, t + 1, None]
                 held = firsts[:, t] < begin
-                held_any, held_all = bool(held.any()), bool(held.all())
+                held_any, held_all, kept = bool(held.any()), bool(held.all()), held[:, None, None]
                 t = begin - 1
                 continue
             k = t - chunk.start
@@ -201,14 +202,14 @@ def _feedforward(feeds: np.ndarray, closed: np.ndarray, settled: np.ndarray, row
             following = chunk_transposed[:, k] @ p
             following += weighted[:, t]
             if held_any:
-                offsets[held, t] = offsets[held, t + 1]
-                following[held] = p[held]
-            if checked[t]:
-                held |= at_fixed_point[:, t] & _unchanged_rows(following, p)
+                np.copyto(offsets[:, t], offsets[:, t + 1], where=kept)
+                np.copyto(following, p, where=kept)
+            if checked[t] and (arriving := at_fixed_point[:, t] & ~held).any():
+                held |= arriving & _unchanged_rows(following, p)
             if opened[t]:
                 held &= ~opens[:, t]
             if checked[t] or opened[t]:
-                held_any, held_all = bool(held.any()), bool(held.all())
+                held_any, held_all, kept = bool(held.any()), bool(held.all()), held[:, None, None]
             p = following
             t -= 1
     return offsets[..., 0]
@@ -312,6 +313,7 @@ def _segment_starts(ids: np.ndarray) -> np.ndarray:
 
 
 def _unchanged_rows(new: np.ndarray, old: np.ndarray) -> np.ndarray:
-    """`_unchanged` of each of N rows (`N x ...` arrays)."""
-    axes = tuple(range(1, new.ndim))
-    return np.max(np.abs(new - old), axis=axes) <= _CONVERGED * (1.0 + np.max(np.abs(old), axis=axes))
+    """Whether each of N rows (`N x ...` arrays) is unchanged: its largest change within
+    _CONVERGED of its largest entry (plus 1)."""
+    new, old = new.reshape(len(new), -1), old.reshape(len(old), -1)
+    return np.abs(new - old).max(axis=1) <= _CONVERGED * (1.0 + np.abs(old).max(axis=1))

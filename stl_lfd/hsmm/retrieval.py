@@ -189,6 +189,7 @@ def hermite_interpolation(times: np.ndarray, positions: np.ndarray, velocities: 
     piece = np.clip(np.searchsorted(times, new_times, side="right") - 1, 0, len(times) - 2)
     offset = (new_times - times[piece])[:, None]
     squared = offset * offset
-    new_positions = positions[:-1][piece] + linear[piece] * offset + quadratic[piece] * squared + cubic[piece] * (squared * offset)
-    new_velocities = linear[piece] + quadratic[piece] * offset * 2 + cubic[piece] * squared * 3
+    linear, quadratic, cubic = linear[piece], quadratic[piece], cubic[piece]
+    new_positions = positions[:-1][piece] + linear * offset + quadratic * squared + cubic * (squared * offset)
+    new_velocities = linear + quadratic * offset * 2 + cubic * squared * 3
     return new_positions, new_velocities
