@@ -1,6 +1,6 @@
 """`make bench`: run every benchmark and print its table."""
 
-from benchmarks import bench_cli, bench_command, bench_endpoint, bench_hsmm, bench_optim, bench_placements, bench_reorient, bench_sim, bench_stl
+from benchmarks import bench_cli, bench_command, bench_endpoint, bench_hsmm, bench_optim, bench_placements, bench_plan, bench_reorient, bench_sim, bench_stl
 
 
 def main() -> None:
@@ -11,6 +11,7 @@ def main() -> None:
     bench_sim.main()
     bench_command.main([])
     bench_optim.main([])
+    bench_plan.main([])
     bench_placements.main([])
     bench_reorient.main(["--demonstrated-yaws"])
     bench_reorient.main([])

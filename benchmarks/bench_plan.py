@@ -7,12 +7,16 @@ design search, 256 plans) against the same run's rollouts.
 Every ratio is measured within one run (or one process), so that the machine's load weighs on
 both sides alike. The runs are the bundled phi1, phi2 and phi3_strict tasks on PyBullet and the
 suite's `until_l4` (an unbounded until under the new semantics, whose plans are expensive to
-score) on the kinematic backend, each with its own budget and seed 0.
+score) on the kinematic backend, each with its own budget and seed 0. On PyBullet, method
+`plan` scores candidates through the robot's tracking model, refitted after every trial (so
+every proposal plans its candidates anew); each PyBullet run is also made `untracked` (the
+plan as it stands, `benchmarks.bench_suite.untracked`), whose plans are memoised for the run.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import statistics
 import tempfile
@@ -64,26 +68,29 @@ class RunTiming:
 
     name: str
     backend: str
+    untracked: bool
     trials: int
     optimizer_median: float
     rollout_median: float
     first_proposal: float
 
 
-def run_timing(name: str) -> RunTiming:
-    """Run the task `name` of RUNS with method plan and read its trials' timings."""
+def run_timing(name: str, untracked: bool = False) -> RunTiming:
+    """Run the task `name` of RUNS with method plan (`untracked`: scoring the plan as it stands)
+    and read its trials' timings."""
+    from benchmarks.bench_suite import untracked as plan_as_it_stands
     from stl_lfd.optim import finish_run, load_task, start_run
 
     path, backend = RUNS[name]
     task = load_task(path).with_overrides(method="plan", backend=backend, seed=0)
-    with tempfile.TemporaryDirectory() as folder, warnings.catch_warnings():
+    with tempfile.TemporaryDirectory() as folder, warnings.catch_warnings(), plan_as_it_stands() if untracked else contextlib.nullcontext():
         warnings.simplefilter("ignore")
         with start_run(task, Path(folder) / "run") as prepared:
             finish_run(prepared)
         trials = [json.loads(line) for line in (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()]
     proposals = [trial["optimizer_seconds"] for trial in trials]
     rollouts = [trial["rollout_seconds"] for trial in trials]
-    return RunTiming(name, backend, len(trials), statistics.median(proposals), statistics.median(rollouts), proposals[0])
+    return RunTiming(name, backend, untracked, len(trials), statistics.median(proposals), statistics.median(rollouts), proposals[0])
 
 
 def rows(batched: float, alone: float, count: int, runs: list[RunTiming]) -> list[Row]:
@@ -98,7 +105,7 @@ def rows(batched: float, alone: float, count: int, runs: list[RunTiming]) -> lis
         )
     ]
     for run in runs:
-        size = f"{run.name}, {run.backend}, {run.trials} trials"
+        size = f"{run.name}, {run.backend}{', untracked' if run.untracked else ''}, {run.trials} trials"
         if run.backend == "kinematic":  # a rollout is the plan itself: the target is absolute
             median_target, first_target = UNTIL_TARGET, UNTIL_TARGET
         else:
@@ -117,7 +124,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--plans", type=int, default=128, help="plans timed each way")
     args = parser.parse_args(argv)
     batched, alone = plans_per_second(args.plans)
-    print_table("Method plan: plans and proposals", rows(batched, alone, args.plans, [run_timing(name) for name in args.runs]))
+    runs = [run_timing(name, untracked) for name in args.runs for untracked in ((False, True) if RUNS[name][1] == "pybullet" else (False,))]
+    print_table("Method plan: plans and proposals", rows(batched, alone, args.plans, runs))
 
 
 if __name__ == "__main__":

@@ -102,7 +102,7 @@ def solve_batch(A: np.ndarray, B: np.ndarray, problems: Sequence[Tracking]) -> l
     steps = max(problem.segment_ids.size for problem in problems)
     rows, firsts = table.rows(problems, steps)  # N x (steps - 1) each
     weighted = np.stack([_weighted_targets(problem, steps) for problem in problems])  # N x steps x n
-    gains, feeds, closed, settled = table.arrays()
+    feeds, closed, settled = table.arrays()
     offsets = _feedforward(feeds, closed, settled, rows, firsts, weighted)
     states = _trajectory(B, closed, rows, offsets, np.stack([problem.x0 for problem in problems]))
     return [states[i, steps - problem.segment_ids.size :] for i, problem in enumerate(problems)]
@@ -153,11 +153,11 @@ class _GainTable:
             self.size += len(recursion.gains)
         return self.first[id(recursion)]
 
-    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Gains `G x m x n`, feedforward maps `G x m x n`, closed loops `G x n x n`, and `G`
-        flags: the row is the fixed point of a converged recursion."""
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Feedforward maps `G x m x n`, closed loops `G x n x n`, and `G` flags: the row is the
+        fixed point of a converged recursion."""
         settled = [np.arange(len(part.gains)) == (len(part.gains) - 1 if part.converged else -1) for part in self.parts]
-        return tuple(np.concatenate([getattr(part, name) for part in self.parts]) for name in ("gains", "feeds", "closed")) + (np.concatenate(settled),)
+        return np.concatenate([part.feeds for part in self.parts]), np.concatenate([part.closed for part in self.parts]), np.concatenate(settled)
 
 
 def _weighted_targets(problem: Tracking, steps: int) -> np.ndarray:
