@@ -4,18 +4,19 @@ is true for the run it describes (the semantics, the method's phases, the best t
 
 from __future__ import annotations
 
-import os
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 
-from stl_lfd.optim.settings import SINGLE_SKILL, Parameters
+from stl_lfd.optim.settings import SINGLE_SKILL, Optimizer, Parameters
 from stl_lfd.report.run_data import RunData
 
 # Figures that are drawn only when the run has what they show: name -> why one is left out.
 LEFT_OUT = {
     "components": "the run recorded no robustness per part of the spec (its trials predate it, or every trial failed)",
-    "region_distances": "the spec names no region under F, G or G ! (a box of x, y, z bounds)",
+    "region_distances": "the spec names no fixed region (a box of constant x, y, z bounds) under F, G or G !",
+    "durations": "no duration mean was optimised",
     "gp_slices": "fewer than three trials finished",
     "forces": "no trial touched anything (the contact force was zero throughout)",
     "tilt": "no trial turned the hand by more than a degree",
@@ -50,17 +51,22 @@ def task_rows(run: RunData) -> list[tuple[str, str]]:
     """The task as a table: what was run, what was optimised, how, and how long it took."""
     task, summary = run.task, run.summary
     placements = f", {len(task.placements)} object placements (the worst counts)" if task.placements else ""
-    status = "complete" if summary.complete else f"stopped after {summary.trials} of {task.optimizer.trials} trials"
+    status = "complete" if summary.complete else f"stopped after {summary.trials} of {summary.budget} trials"
     return [
         ("spec", _shown_path(task.spec)),
         ("robustness", semantics_in_words(run) + "; above 0 satisfies the spec"),
         ("execution", f"{task.backend} backend, scene {task.scene}{placements}; {task.duration:g} s at {task.rate:g} Hz"),
         ("optimised", "; ".join(optimised_in_words(run))),
         ("parameters", f"{run.space.dimension}: {', '.join(run.space.names)}"),
-        ("method", f"{task.optimizer.phases}; seed {task.optimizer.seed}"),
+        ("method", f"{_optimizer(run).phases}; seed {task.optimizer.seed}"),
         ("trials", f"{summary.trials} finished ({status}), {summary.failed_trials} failed, {summary.wall_seconds:.1f} s in all"),
         ("run directory", _shown_path(run.path)),
     ]
+
+
+def _optimizer(run: RunData) -> Optimizer:
+    """The run's optimiser settings with its budget as it stands (a resume may have raised it)."""
+    return dataclasses.replace(run.task.optimizer, trials=run.summary.budget)
 
 
 def optimised_in_words(run: RunData) -> list[str]:
@@ -85,7 +91,7 @@ def _skill_parameters(parameters: Parameters) -> list[str]:
         phrases.append(f"the duration means of {_states(durations.components)}, within {_deviations(durations.width)}")
     transitions = {
         "none": "transitions not optimised",
-        "band": "the transition band (each state's next two successors)",
+        "band": "the transition band (each state to its next one or two states)",
         "full": "every transition probability",
     }
     phrases.append(transitions[parameters.transitions])
@@ -103,7 +109,9 @@ def _states(components: tuple[int, ...] | str) -> str:
 
 
 def commands(run: RunData) -> list[tuple[str, str]]:
-    """`(command, what it does)`: watch the best trial, continue the run, redraw this report."""
+    """`(command, what it does)`: watch the best trial, continue the run, redraw this report
+    (paths relative to the working directory when the run lies in it, else all absolute)."""
+    relative = not Path(_shown_path(run.path)).is_absolute()
     path = _shown_path(run.path)
     found = []
     if run.best is not None:
@@ -111,28 +119,29 @@ def commands(run: RunData) -> list[tuple[str, str]]:
         found.append(
             (f"stlopt replay {path} --trial {trial}", f"watch the best trial again (in a window, or without a display as {path}/replay-trial-{trial}.mp4)")
         )
-    task_file = _task_file(run)
+    task_file = _task_file(run, relative)
     if task_file is not None:
-        more = max(run.task.optimizer.trials, run.summary.trials) * 2
+        more = max(run.summary.budget, run.summary.trials) * 2
         found.append((f"stlopt optimize {task_file} --out {path} --resume -N {more}", f"continue the run up to {more} trials"))
     found.append((f"stlopt report {path}", "redraw this report (after the run went on)"))
     return found
 
 
-def _task_file(run: RunData) -> str | None:
+def _task_file(run: RunData, relative: bool) -> str | None:
     from stl_lfd.optim.runs.directory import RunDirectory
 
     inputs = RunDirectory(run.path).inputs()
-    return _shown_path(Path(inputs["task_file"])) if inputs else None
+    return _shown_path(Path(inputs["task_file"]), relative) if inputs else None
 
 
-def _shown_path(path: Path) -> str:
-    """`path` relative to the working directory when it lies inside it."""
-    path = Path(path)
+def _shown_path(path: Path, relative: bool = True) -> str:
+    """`path` relative to the working directory when it lies inside it (and `relative`),
+    otherwise absolute."""
+    resolved = Path(path).resolve()
     try:
-        return str(path.resolve().relative_to(Path.cwd().resolve()))
+        return str(resolved.relative_to(Path.cwd().resolve())) if relative else str(resolved)
     except ValueError:
-        return str(path.resolve()) if path.is_absolute() else os.fspath(path)
+        return str(resolved)
 
 
 def caption(name: str, run: RunData) -> str:
@@ -140,17 +149,18 @@ def caption(name: str, run: RunData) -> str:
     best = f"the best (trial {run.best.trial}) in red" if run.best is not None else "no best trial yet"
     numbered = "darker in trial order, the unoptimised skill dashed, " + best
     semantics = semantics_in_words(run)
-    optimizer = run.task.optimizer
+    optimizer = _optimizer(run)
     captions = {
         "trajectories": (
             f"End-effector paths of every trial seen from above (x-y) and from the side (x-z, y-z): {numbered}. "
-            "Circles mark where the unoptimised and the best path start, squares where they end; the spec's regions are the coloured boxes."
+            "Circles mark where the unoptimised and the best path start, squares where they end."
+            + (" The coloured boxes are the regions the spec uses." if _drawn_regions(run) else "")
             + (" Black arrows: where the best trial's hand points (its approach axis), projected on each view." if _best_turns_the_hand(run) else "")
         ),
         "region_distances": (
             "Signed distance (m, negative inside) to each region the spec names, over the time window in which it applies: "
             "F R is met when the curve dips below 0 somewhere in its window, G R when it stays below 0 throughout, "
-            f"G !R when it stays above 0; {best}."
+            f"G !R when it stays above 0; the unoptimised skill dashed, {best}."
         ),
         "robustness": (
             f"The {semantics} of each trial, the value the optimiser maximises (above 0 satisfies the spec): "
@@ -163,13 +173,26 @@ def caption(name: str, run: RunData) -> str:
             "its mean, its 95 % band and the trials, projected. It shows what the trials say about these parameters "
             "(methods plan and stl model each part of the spec apart instead)."
         ),
-        "transitions": "The skill's states and transition probabilities before and after optimisation (edge width by probability), the states the retrieval follows in red.",
-        "durations": "Duration means of each state per trial, stacked: the skill's timeline trial by trial (the best trial's label in red).",
+        "transitions": (
+            "The states (numbered, their duration means below them) and transitions before and after optimisation, for each skill whose "
+            "transitions are optimised: edge width by the probability of leaving a state for another (each row normalised), the states "
+            "the retrieval follows filled pink and the transitions it takes in red."
+        ),
+        "durations": (
+            "Duration means of the states each trial's retrieval follows, stacked in the order it follows them (states it skips are left "
+            "out): the skill's timeline trial by trial, the best trial's label in red"
+            + ("; the dashed line is where the rollout ends." if len(run.models) == 1 else ".")
+        ),
         "forces": f"Contact force over time per trial: {numbered}.",
         "compare": "The best robustness so far, trial by trial, of this run and of each run given with --compare (each in its own semantics, named in the legend).",
         "tilt": f"The hand's tilt (the angle between its approach axis and straight down) over time per trial: {numbered}.",
     }
     return captions.get(name, name)
+
+
+def _drawn_regions(run: RunData) -> bool:
+    """Whether the trajectories figure draws a region: one that bounds two of x, y, z."""
+    return any(len(set(box) & {"x", "y", "z"}) >= 2 for box in run.regions.values())
 
 
 def _best_turns_the_hand(run: RunData) -> bool:
@@ -189,7 +212,10 @@ def _components_caption(run: RunData) -> str:
             "above the lowest part (circled); once every part is above 0 it is a mean of the parts weighted towards the lowest, "
             "so it lies between the lowest part and their mean"
         )
-    text = f"The robustness of each top-level part of the spec per trial and the spec's value (black), which is {rule}."
+    text = (
+        f"The spec's robustness per trial (black, on top) and each of its top-level parts below it, each on its own scale; circles mark "
+        f"the lowest part. The spec's value is {rule}."
+    )
     if task.placements:
         text += " With several object placements the parts are composed at each placement, and the worst placement counts."
     return text

@@ -4,6 +4,7 @@ returns a matplotlib Figure, or None when the run lacks the data for it."""
 from __future__ import annotations
 
 import numpy as np
+from matplotlib import patheffects
 from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrowPatch, Rectangle
@@ -84,8 +85,8 @@ def _region_boxes(axes, run: RunData, across: str, up: str) -> None:
         color = colors[(x0, x1, y0, y1)]
         axes.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, facecolor=color, alpha=0.2, edgecolor="none"))
         axes.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor=color, lw=1))
-        label = {"facecolor": "white", "alpha": 0.8, "edgecolor": "none", "pad": 1}
-        axes.text(x0, y1, f"{', '.join(names)}", ha="left", va="bottom", fontsize=10, color=color, weight="bold", zorder=6, bbox=label)
+        outline = [patheffects.withStroke(linewidth=2.5, foreground="white")]
+        axes.text(x0, y1, f"{', '.join(names)}", ha="left", va="bottom", fontsize=10, color=color, weight="bold", zorder=6, path_effects=outline)
 
 
 def _path_with_ends(axes, table, across: str, up: str, color, width: float, style: str, label: str) -> None:
@@ -124,7 +125,7 @@ def tilt(run: RunData) -> Figure | None:
     axes = figure.subplots()
     _per_trial(axes, run, {number: (table.times, np.degrees(table.columns["tilt"])) for number, table in tables.items()})
     axes.set(xlabel="t (s)", ylabel="tilt (degrees from straight down)", title="the hand's tilt per trial")
-    axes.legend(loc="best")
+    figure.legend(loc="outside right upper", fontsize="small")
     return figure
 
 
@@ -154,6 +155,8 @@ def region_distances(run: RunData) -> Figure | None:
         box = run.regions[constraint.region]
         for color, number in zip(_trial_colors(len(numbers)), numbers):
             _plot_distance(axes, run.signals[number], box, constraint.interval, color, 1.0)
+        if 0 in run.signals:
+            _plot_distance(axes, run.signals[0], box, constraint.interval, INITIAL, 1.5, "--")
         if best in run.signals:
             _plot_distance(axes, run.signals[best], box, constraint.interval, BEST, 2.2)
         axes.axhline(0.0, color="k", lw=1)
@@ -162,44 +165,65 @@ def region_distances(run: RunData) -> Figure | None:
     return figure
 
 
-def _plot_distance(axes, table, box, interval, color, width) -> None:
+def _plot_distance(axes, table, box, interval, color, width, style="-") -> None:
     times = table.times
     inside = np.ones_like(times, dtype=bool) if interval is None else (times >= interval[0] - 1e-9) & (times <= interval[1] + 1e-9)
-    axes.plot(times[inside], signed_distance(table, box)[inside], color=color, lw=width)
+    axes.plot(times[inside], signed_distance(table, box)[inside], color=color, lw=width, ls=style)
 
 
 def robustness_per_trial(run: RunData) -> Figure:
     """Robustness of each trial and the best so far; Sobol trials distinguished from the rest."""
-    figure = Figure(figsize=(7.5, 4), layout="constrained")
+    figure = Figure(figsize=(9, 4), layout="constrained")
     axes = figure.subplots()
     _robustness_curves(axes, run, label_prefix="")
     axes.axhline(0.0, color="k", lw=1)
     axes.axhline(run.summary.initial_robustness, color=INITIAL, ls="--", lw=1, label="unoptimised")
     axes.set(xlabel="trial", ylabel=f"{run.task.semantics} robustness", title=f"{run.task.name}: robustness per trial")
-    axes.legend(loc="lower right")
+    figure.legend(loc="outside right upper", fontsize="small")
     return figure
 
 
 def component_robustness(run: RunData) -> Figure | None:
-    """Robustness of each top-level part of the spec per trial (which part binds, trial by
-    trial), with the spec's robustness they compose to; None for runs recorded without parts."""
+    """Robustness of each top-level part of the spec per trial, each on its own scale (parts
+    measured in metres and in newtons side by side would flatten one another), under the spec's
+    robustness they compose to with the lowest part circled; None for runs recorded without
+    parts. Beyond MAX_PANELS parts (many placements), all on one panel."""
     trials = [trial for trial in run.trials if trial.components]
     if not trials:
         return None
     names = list(trials[0].components)
-    figure = Figure(figsize=(10, 4.2), layout="constrained")
-    axes = figure.subplots()
     numbers = np.array([trial.trial for trial in trials])
+    values = np.array([[trial.components.get(name, np.nan) for name in names] for trial in trials], dtype=float)  # n x parts
+    lowest = np.nanmin(values, axis=1)
+    separate = len(names) <= MAX_PANELS
+    rows = 1 + len(names) if separate else 1
+    figure = Figure(figsize=(10, 1.8 + 1.4 * rows), layout="constrained")
+    panels = np.atleast_1d(figure.subplots(rows, 1, sharex=True, squeeze=False)[:, 0])
+    top = panels[0]
+    top.plot(numbers, [trial.robustness for trial in trials], color="k", lw=2, label=f"spec ({COMPOSED[run.task.semantics]})")
+    top.scatter(numbers, lowest, s=50, facecolors="none", edgecolors="k", zorder=3, label="lowest part")
     for index, name in enumerate(names):
-        values = np.array([trial.components.get(name, np.nan) for trial in trials], dtype=float)
-        axes.plot(numbers, values, marker="o", ms=3, lw=1, color=f"C{index % 10}", label=name)
-    axes.plot(numbers, [trial.robustness for trial in trials], color="k", lw=2, label=f"spec ({COMPOSED[run.task.semantics]})")
-    lowest = np.array([min(trial.components.values()) for trial in trials])
-    axes.scatter(numbers, lowest, s=60, facecolors="none", edgecolors="k", zorder=3, label="lowest part")
-    axes.axhline(0.0, color="k", lw=0.8, ls=":")
-    axes.set(xlabel="trial", ylabel=f"{run.task.semantics} robustness", title=f"{run.task.name}: robustness of each part of the spec")
-    figure.legend(loc="outside right upper", fontsize="small")
+        axes = panels[1 + index] if separate else top
+        axes.plot(numbers, values[:, index], marker="o", ms=3, lw=1, color=f"C{index % 10}", label=name)
+        if separate:
+            binding = values[:, index] == lowest
+            axes.scatter(numbers[binding], values[binding, index], s=50, facecolors="none", edgecolors="k", zorder=3)
+            axes.set_ylabel(_wrapped(name), fontsize="small")
+    for axes in panels:
+        axes.axhline(0.0, color="k", lw=0.8, ls=":")
+    top.set(ylabel=f"{run.task.semantics} robustness", title=f"{run.task.name}: the spec's robustness and each of its parts (circled: the lowest)")
+    panels[-1].set_xlabel("trial")
+    top.legend(loc="best", fontsize="small")
     return figure
+
+
+MAX_PANELS = 8
+
+
+def _wrapped(text: str, width: int = 22) -> str:
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width)) or text
 
 
 # How the spec's value is composed of its parts, as the components figure's legend says it.
@@ -267,7 +291,8 @@ def gp_slices(run: RunData, parameters: list[str] | None = None) -> Figure | Non
         axes.scatter(X[:, index], Y, color="k", s=12, label="trials")
         axes.axvline(run.best.x[index], color=BEST, lw=1, label="best")
         axes.axhline(0.0, color="k", lw=0.8)
-        axes.set(xlabel=name, ylabel="robustness", title=f"GP slice through the best point: {name}")
+        axes.set(xlabel=name, ylabel="robustness", title=f"through the best point: {name}")
+        axes.tick_params(axis="x", labelrotation=30)
     axes_list[0].legend(loc="best", fontsize=8)
     return figure
 
@@ -283,7 +308,7 @@ def _most_relevant(model, names: list[str], count: int) -> list[str]:
 def transition_graphs(run: RunData) -> Figure:
     """The skill's states and transitions before and after optimisation: edge width by
     probability, the state sequence followed by the retrieval highlighted."""
-    skills = list(run.models)
+    skills = [skill for skill, part in run.space.parts.items() if part.transition_slots] or list(run.models)
     figure = Figure(figsize=(12, 3.6 * len(skills)), layout="constrained")
     rows = figure.subplots(len(skills), 2, squeeze=False)
     best_models = run.best_models()
@@ -337,10 +362,13 @@ def followed_states(model: HSMM) -> list[int]:
     return [int(states[0])] + [int(states[index]) for index in changes]
 
 
-def durations_per_trial(run: RunData) -> Figure:
-    """Duration means of each state per trial, stacked (the skill's timeline per trial); one
-    panel per skill whose durations are optimised."""
-    skills = [skill for skill, part in run.space.parts.items() if part.duration_slots] or list(run.models)[:1]
+def durations_per_trial(run: RunData) -> Figure | None:
+    """Duration means of the states each trial's retrieval follows, stacked in the order it
+    follows them (the skill's timeline per trial); one panel per skill whose durations are
+    optimised, None when none is."""
+    skills = [skill for skill, part in run.space.parts.items() if part.duration_slots]
+    if not skills:
+        return None
     figure = Figure(figsize=(9, 4 * len(skills)), layout="constrained")
     for axes, skill in zip(np.atleast_1d(figure.subplots(len(skills), 1, squeeze=False)[:, 0]), skills):
         _duration_bars(axes, run, skill)
@@ -350,11 +378,16 @@ def durations_per_trial(run: RunData) -> Figure:
 def _duration_bars(axes, run: RunData, skill: str) -> None:
     labels = ["init"] + [str(trial.trial) for trial in run.trials]
     models = [run.models[skill]] + [run.space.apply(run.models, trial.x)[skill] for trial in run.trials]
-    durations = np.array([model.duration_means_ for model in models])
     bottom = np.zeros(len(models))
-    for state in range(durations.shape[1]):
-        axes.bar(labels, durations[:, state], bottom=bottom, color=f"C{state}", label=f"state {state + 1}", width=0.8)
-        bottom += durations[:, state]
+    labelled = set()
+    for position, model in enumerate(models):
+        for state in followed_states(model):
+            label = f"state {state + 1}" if state not in labelled else None
+            labelled.add(state)
+            axes.bar(labels[position], model.duration_means_[state], bottom=bottom[position], color=f"C{state % 10}", label=label, width=0.8)
+            bottom[position] += model.duration_means_[state]
+    if len(run.models) == 1:
+        axes.axhline(run.task.duration, color="k", ls="--", lw=1, label="rollout ends")
     if run.best is not None:
         axes.get_xticklabels()[labels.index(str(run.best.trial))].set_color(BEST)
     title = "duration means per state" + ("" if len(run.models) == 1 else f" ({skill})")

@@ -89,9 +89,25 @@ def load_run(path: Path) -> RunData:
         space=build_search_space(models, task.parameters, task.source),
         trials=trials,
         signals=signals,
-        regions=region_boxes(spec),
+        regions=used_regions(spec),
         constraints=region_constraints(spec),
     )
+
+
+def used_regions(spec: ast.Spec) -> dict[str, dict[str, tuple[float, float]]]:
+    """The regions (`region_boxes`) that the spec's formula uses, directly or through its
+    definitions; an included file's other regions are left out."""
+    definitions = {definition.name: definition.formula for definition in spec.definitions}
+    used: set[str] = set()
+    pending: list[ast.Node] = [spec.formula]
+    while pending:
+        node = pending.pop()
+        if isinstance(node, ast.Ref) and node.name not in used:
+            used.add(node.name)
+            if node.name in definitions:
+                pending.append(definitions[node.name])
+        pending.extend(node.children())
+    return {name: box for name, box in region_boxes(spec).items() if name in used}
 
 
 def region_constraints(spec: ast.Spec) -> list[RegionConstraint]:

@@ -127,7 +127,7 @@ def test_captions_follow_the_semantics_and_unused_figures_say_why(tmp_path, lear
     page = page_text(report / "index.html")
     assert "transitions.png: the transitions were not optimised, so the graph is the same before and after" in page
     assert "3 trials: 2 Sobol, then random" in page and "classic robustness" in page
-    assert "which is their minimum, so the lowest part (circled) is the spec's value" in page
+    assert "The spec's value is their minimum, so the lowest part (circled) is the spec's value" in page
     run = load_run(tmp_path / "run")
     assert all(trial.robustness == min(trial.components.values()) for trial in run.trials)  # what the caption says
     under_new = dataclasses.replace(run, task=dataclasses.replace(run.task, semantics="new"))
@@ -144,3 +144,12 @@ def test_a_run_that_turns_the_hand_draws_its_tilt_and_approach_axis(tmp_path):
     assert_picture(folder / "report" / "tilt.png")
     assert 'src="tilt.png"' in (folder / "report" / "index.html").read_text()
     assert "Black arrows: where the best trial's hand points" in page_text(folder / "report" / "index.html")
+
+
+def test_only_the_regions_the_spec_uses_are_drawn(tmp_path):
+    from stl_lfd.report.run_data import used_regions
+    from stl_lfd.stl import load_spec
+
+    (tmp_path / "regions.stl").write_text((ROOT / "specs" / "regions.stl").read_text())
+    (tmp_path / "mine.stl").write_text('include "regions.stl"\nNEAR := L1\nmine := F NEAR & G[0, 5] !L3\n')
+    assert list(used_regions(load_spec(tmp_path / "mine.stl"))) == ["L1", "L3"]
