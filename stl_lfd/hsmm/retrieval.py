@@ -88,7 +88,9 @@ def retrieve_batch(
     Args:
         models: N fitted HSMMs or TP-HSMMs.
         durations: N seconds to retrieve (None, or a None entry: as `retrieve`'s default).
-        rate, control_cost, poses: as in `retrieve`, for every model.
+        rate: samples per second of the results (default: the models' own rate).
+        control_cost: weight r of the acceleration cost R = r I.
+        poses: for TP-HSMMs, the pose of every frame but `base` (see `TPHSMM.at`).
     """
     durations = [None] * len(models) if durations is None else list(durations)
     models = [model.at(poses or {}) if isinstance(model, TPHSMM) else model for model in models]
