@@ -24,6 +24,10 @@ from stl_lfd.signals import SignalTable
 from stl_lfd.sim.tracking import Execution, TrackingModel
 
 TRACKING_FILE = "tracking.json"
+# Below this departure from the plan (m, RMS per axis over the executions so far) the plan is
+# taken as the execution: predictions would change nothing a spec can tell, at the cost of
+# planning every candidate again after each trial.
+FOLLOWS_THE_PLAN = 0.001
 
 
 class RunTracking:
@@ -56,10 +60,13 @@ class RunTracking:
             self._write(numbers, model)
         return self._latest
 
-    def plan_score(self, history: Sequence[Trial]) -> tuple[tuple[int, ...], Callable[[np.ndarray], np.ndarray]]:
+    def plan_score(self, history: Sequence[Trial]) -> tuple[tuple[int, ...] | None, Callable[[np.ndarray], np.ndarray] | None]:
         """The plan score (`SkillObjective.plan_score`) through the model of `history`, and the
-        model's identity (the same identity, the same score)."""
+        model's identity (the same identity, the same score); `(None, None)` while the robot
+        follows the plan within FOLLOWS_THE_PLAN (the plan itself is the prediction)."""
         numbers, model = self.model(history)
+        if not used(model):
+            return None, None
         return numbers, self.objective.plan_score(model)
 
     def _execution(self, number: int, history: Sequence[Trial]) -> Execution | None:
@@ -71,7 +78,14 @@ class RunTracking:
 
     def _write(self, numbers: tuple[int, ...], model: TrackingModel) -> None:
         if self.folder is not None:
-            write_atomically(self.folder / TRACKING_FILE, json.dumps({"trials": list(numbers), **model.to_dict()}, indent=2) + "\n")
+            record = {"trials": list(numbers), "used": used(model), **model.to_dict()}
+            write_atomically(self.folder / TRACKING_FILE, json.dumps(record, indent=2) + "\n")
+
+
+def used(model: TrackingModel) -> bool:
+    """Whether method plan scores plans through `model`: when the robot departs from the plan
+    by more than FOLLOWS_THE_PLAN on some axis."""
+    return bool(np.max(model.plan_rms_) > FOLLOWS_THE_PLAN)
 
 
 def execution_of(objective: SkillObjective, models: dict[str, HSMM], signals: SignalTable) -> Execution:

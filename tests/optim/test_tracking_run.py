@@ -10,7 +10,7 @@ from scipy.signal import lfilter
 
 import stl_lfd.optim.objective as objective_module
 from stl_lfd.optim import finish_run, load_task, resume_run, start_run
-from stl_lfd.optim.tracking import TRACKING_FILE, read_tracking
+from stl_lfd.optim.tracking import FOLLOWS_THE_PLAN, TRACKING_FILE, read_tracking, used
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.kinematic import KinematicBackend
 from stl_lfd.sim.reference import Rollout
@@ -58,11 +58,19 @@ def test_a_sagging_robot_is_learned_and_a_resumed_run_proposes_the_same(tmp_path
     assert model.kind_ in ("offset", "filter", "clocked filter")
     assert model.offsets_[2] == pytest.approx(-SAG, abs=1e-3)
     assert np.all(model.heldout_rms_ < 0.2 * model.plan_rms_)
+    assert json.loads((whole / TRACKING_FILE).read_text())["used"] is True
 
     halves = tmp_path / "halves"
     finish_run(start_run(plan_task(tmp_path, learned_model_file, 3), halves))
     finish_run(resume_run(halves, trials=4))
     assert np.allclose(trial_points(halves), trial_points(whole), rtol=0, atol=1e-12)
+
+
+def test_plans_go_through_the_model_only_where_the_robot_departs_from_them():
+    from stl_lfd.sim.tracking import TrackingModel
+
+    assert not used(TrackingModel(plan_rms_=np.array([0.3, 0.2, 0.9]) * FOLLOWS_THE_PLAN))  # PyBullet: hundredths of a mm
+    assert used(TrackingModel(plan_rms_=np.array([0.0, 0.0, 2.0]) * FOLLOWS_THE_PLAN))
 
 
 @pytest.mark.slow

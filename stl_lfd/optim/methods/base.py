@@ -63,7 +63,7 @@ class Problem:
         initial_design: the `M x d` Sobol points, when already computed (saves torch's import).
         tracked_plan: history -> (key, plan): `plan` through the tracking model learned from the
             history's executions, for a robot that does not execute the plan (None: it does);
-            the same key, the same model.
+            the same key, the same model; `(None, None)` while the plan itself will do.
     """
 
     bounds: np.ndarray
@@ -71,7 +71,7 @@ class Problem:
     features: Callable | None = None
     plan: Callable[[np.ndarray], np.ndarray] | None = None
     initial_design: np.ndarray | None = None
-    tracked_plan: Callable[[Sequence[Trial]], tuple[Hashable, Callable[[np.ndarray], np.ndarray]]] | None = None
+    tracked_plan: Callable[[Sequence[Trial]], tuple[Hashable | None, Callable[[np.ndarray], np.ndarray] | None]] | None = None
 
     @property
     def dimension(self) -> int:

@@ -119,6 +119,8 @@ class PlanSearch(SearchMethod):
         if self.problem.tracked_plan is None:
             return self.plan
         key, score = self.problem.tracked_plan(history)
+        if key is None:  # the robot follows the plan
+            return self.plan
         if self._tracked is None or self._tracked[0] != key:
             self._tracked = (key, Plan(score, self.problem.bounds))
         return self._tracked[1]
