@@ -10,11 +10,13 @@ The latest model is kept in `tracking.json` for the report and the API.
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
 
+from stl_lfd.errors import RunError
 from stl_lfd.files import write_atomically
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim.objective import SkillObjective
@@ -94,10 +96,24 @@ def execution_of(objective: SkillObjective, models: dict[str, HSMM], signals: Si
     return Execution(reference.times, reference.positions, signals.times, np.column_stack([signals.columns[axis] for axis in "xyz"]))
 
 
-def read_tracking(folder: Path) -> tuple[list[int], TrackingModel] | None:
-    """The trial numbers and the tracking model in `folder/tracking.json`, if the run has one."""
+@dataclass(frozen=True)
+class RunTrackingRecord:
+    """What `tracking.json` holds: the trials (0: the unoptimised skill) the model was fitted
+    on, the model, and whether method plan scored its plans through it."""
+
+    trials: list[int]
+    model: TrackingModel
+    used: bool
+
+
+def read_tracking(folder: Path) -> RunTrackingRecord | None:
+    """The tracking model of the run in `folder` (its `tracking.json`), if it learned one."""
     path = Path(folder) / TRACKING_FILE
     if not path.is_file():
         return None
-    data = json.loads(path.read_text())
-    return list(data["trials"]), TrackingModel.from_dict(data)
+    try:
+        data = json.loads(path.read_text())
+        model = TrackingModel.from_dict(data)
+        return RunTrackingRecord([int(number) for number in data["trials"]], model, bool(data.get("used", used(model))))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
+        raise RunError(f"{path}: damaged ({getattr(error, 'msg', error)}); delete it and the next trial writes it anew") from None

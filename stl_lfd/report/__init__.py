@@ -40,6 +40,7 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
         ("durations", figures.durations_per_trial(run)),
         ("forces", figures.contact_forces(run)),
         ("tilt", figures.tilt(run)),
+        ("tracking", figures.tracking(run)),
     ]
     if compare:
         made.append(("compare", figures.compare_runs([run] + others)))

@@ -20,6 +20,7 @@ LEFT_OUT = {
     "gp_slices": "fewer than three trials finished",
     "forces": "no trial touched anything (the contact force was zero throughout)",
     "tilt": "no trial turned the hand by more than a degree",
+    "tracking": "the run learned no tracking model (its backend plays the plan back, or its method is not plan)",
 }
 
 
@@ -184,10 +185,26 @@ def caption(name: str, run: RunData) -> str:
             + ("; the dashed line is where the rollout ends." if len(run.models) == 1 else ".")
         ),
         "forces": f"Contact force over time per trial: {numbered}.",
+        "tracking": (
+            "How the robot followed its references. Left: the best trial's executed path against its plan (the reference) and against "
+            "the prediction of the tracking model learned from the executions, per axis. Right: for every trial, the RMS "
+            "error of the plan and of that final model as predictions of what was executed (the model was fitted on the trials "
+            f"{_trial_list(run)}, so most of these are in-sample; tracking.json holds its held-out error). "
+            + (
+                "Method plan scored its candidates by this prediction."
+                if run.tracking is not None and run.tracking.used
+                else "The robot followed its plans within 1 mm, so method plan scored the plans themselves."
+            )
+        ),
         "compare": "The best robustness so far, trial by trial, of this run and of each run given with --compare (each in its own semantics, named in the legend).",
         "tilt": f"The hand's tilt (the angle between its approach axis and straight down) over time per trial: {numbered}.",
     }
     return captions.get(name, name)
+
+
+def _trial_list(run: RunData) -> str:
+    numbers = run.tracking.trials if run.tracking is not None else []
+    return ", ".join("init" if number == 0 else str(number) for number in numbers)
 
 
 def _drawn_regions(run: RunData) -> bool:

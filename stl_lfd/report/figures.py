@@ -413,3 +413,52 @@ def contact_forces(run: RunData) -> Figure | None:
     axes.set(xlabel="t (s)", ylabel="contact force (N)", title=title)
     axes.legend(loc="best")
     return figure
+
+
+def tracking(run: RunData) -> Figure | None:
+    """How the robot followed its references, for a run that learned it (`tracking.json`): the
+    best trial's executed path against the plan and against the tracking model's prediction,
+    per axis over time; and per trial, the RMS error of the plan and of the final model as
+    predictions of what was executed."""
+    if run.tracking is None or run.best is None or run.best.trial not in run.signals:
+        return None
+    from stl_lfd.optim.objective import objective_for
+
+    _, objective = objective_for(run.task, run.models, execute=False)
+    model = run.tracking.model
+    numbers = [number for number in [0, *(trial.trial for trial in run.trials)] if number in run.signals]
+    points = {0: run.space.initial, **{trial.trial: trial.x for trial in run.trials}}
+    errors = {}
+    for number in numbers:
+        table, reference = run.signals[number], objective.reference(run.space.apply(run.models, points[number]))
+        executed = np.column_stack([table.columns[axis] for axis in "xyz"])
+        planned, predicted = reference.positions_at(table.times), model.predict(reference.times, reference.positions, table.times)
+        errors[number] = (_rms(planned - executed), _rms(predicted - executed))
+        if number == run.best.trial:
+            best = (table.times, executed, planned, predicted)
+    figure = Figure(figsize=(12, 6.5), layout="constrained")
+    grid = figure.add_gridspec(3, 2, width_ratios=[3, 2])
+    times, executed, planned, predicted = best
+    for axis, name in enumerate("xyz"):
+        axes = figure.add_subplot(grid[axis, 0])
+        axes.plot(times, planned[:, axis], color="0.6", lw=1.2, label="plan (the reference)")
+        axes.plot(times, executed[:, axis], color=BEST, lw=2, label="executed")
+        axes.plot(times, predicted[:, axis], color="k", lw=1, ls="--", label="predicted by the tracking model")
+        axes.set_ylabel(f"{name} (m)")
+        if axis == 0:
+            axes.set_title(f"best trial ({run.best.trial}): executed, planned and predicted")
+            axes.legend(loc="best", fontsize="small")
+    axes.set_xlabel("t (s)")
+    bars = figure.add_subplot(grid[:, 1])
+    labels = ["init" if number == 0 else str(number) for number in numbers]
+    positions = np.arange(len(numbers))
+    bars.bar(positions - 0.2, [1000 * errors[number][0] for number in numbers], width=0.4, color="0.6", label="plan")
+    bars.bar(positions + 0.2, [1000 * errors[number][1] for number in numbers], width=0.4, color="k", label="tracking model")
+    bars.set_xticks(positions, labels, fontsize=7)
+    bars.set(xlabel="trial", ylabel="RMS error of the prediction (mm)", title=f"predicting each execution ({model.kind_})")
+    bars.legend(loc="best", fontsize="small")
+    return figure
+
+
+def _rms(difference: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(difference**2)))

@@ -10,6 +10,7 @@ import numpy as np
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim import RunDirectory, SearchSpace, Task, Trial, build_search_space
 from stl_lfd.optim.summary import Summary
+from stl_lfd.optim.tracking import RunTrackingRecord, read_tracking
 from stl_lfd.optim.trials import observations
 from stl_lfd.signals import SignalTable, read_signal_csv
 from stl_lfd.stl import ast, load_spec
@@ -45,6 +46,7 @@ class RunData:
     signals: dict[int, SignalTable]
     regions: dict[str, dict[str, tuple[float, float]]]
     constraints: list[RegionConstraint]
+    tracking: RunTrackingRecord | None = None  # tracking.json, when the run learned how its robot tracks
 
     @property
     def best(self) -> Trial | None:
@@ -91,6 +93,7 @@ def load_run(path: Path) -> RunData:
         signals=signals,
         regions=used_regions(spec),
         constraints=region_constraints(spec),
+        tracking=read_tracking(path),
     )
 
 

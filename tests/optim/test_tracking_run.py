@@ -9,6 +9,7 @@ import pytest
 from scipy.signal import lfilter
 
 import stl_lfd.optim.objective as objective_module
+from stl_lfd.errors import RunError
 from stl_lfd.optim import finish_run, load_task, resume_run, start_run
 from stl_lfd.optim.tracking import FOLLOWS_THE_PLAN, TRACKING_FILE, read_tracking, used
 from stl_lfd.signals import SignalTable
@@ -53,12 +54,22 @@ def trial_points(folder):
 def test_a_sagging_robot_is_learned_and_a_resumed_run_proposes_the_same(tmp_path, learned_model_file, sagging):
     whole = tmp_path / "whole"
     finish_run(start_run(plan_task(tmp_path, learned_model_file, 4), whole))
-    trials, model = read_tracking(whole)
+    record = read_tracking(whole)
+    trials, model = record.trials, record.model
     assert trials == [0, 1, 2, 3]  # the unoptimised skill and the trials before the last proposal
     assert model.kind_ in ("offset", "filter", "clocked filter")
     assert model.offsets_[2] == pytest.approx(-SAG, abs=1e-3)
     assert np.all(model.heldout_rms_ < 0.2 * model.plan_rms_)
-    assert json.loads((whole / TRACKING_FILE).read_text())["used"] is True
+    assert record.used
+
+    from stl_lfd.report import write_report
+
+    index, pictures = write_report(whole)
+    assert whole / "report" / "tracking.png" in pictures
+    assert "Method plan scored its candidates by this prediction" in index.read_text()
+    (whole / TRACKING_FILE).write_text('{"trials": [0')
+    with pytest.raises(RunError, match="tracking.json: damaged"):
+        write_report(whole)
 
     halves = tmp_path / "halves"
     finish_run(start_run(plan_task(tmp_path, learned_model_file, 3), halves))
