@@ -1,6 +1,18 @@
 """`make bench`: run every benchmark and print its table."""
 
-from benchmarks import bench_cli, bench_command, bench_endpoint, bench_hsmm, bench_optim, bench_placements, bench_plan, bench_reorient, bench_sim, bench_stl
+from benchmarks import (
+    bench_cli,
+    bench_command,
+    bench_endpoint,
+    bench_hsmm,
+    bench_optim,
+    bench_placements,
+    bench_plan,
+    bench_reorient,
+    bench_sim,
+    bench_stl,
+    bench_tracking,
+)
 
 
 def main() -> None:
@@ -12,6 +24,7 @@ def main() -> None:
     bench_command.main([])
     bench_optim.main([])
     bench_plan.main([])
+    bench_tracking.main([])
     bench_placements.main([])
     bench_reorient.main(["--demonstrated-yaws"])
     bench_reorient.main([])

@@ -9,7 +9,9 @@ The public API, loaded on first use (so `import stl_lfd` loads neither torch nor
   `rollout_model`; `Command` (an external executor, for
   `backend="command"`), `read_reference_csv`;
 - optimisation: `optimize` -> `Result`, with `Parameters`, `MeanParameters`,
-  `DurationParameters` and `Optimizer`; `load_task` for task files.
+  `DurationParameters` and `Optimizer`; `load_task` for task files;
+- how a robot tracks: `TrackingModel` (`fit` on `Execution`s, `predict`), `read_tracking` (a
+  run's `tracking.json`).
 """
 
 from __future__ import annotations
@@ -44,6 +46,9 @@ _HOMES = {
     "DurationParameters": "stl_lfd.optim.settings",
     "Optimizer": "stl_lfd.optim.settings",
     "load_task": "stl_lfd.optim.task",
+    "TrackingModel": "stl_lfd.sim.tracking",
+    "Execution": "stl_lfd.sim.tracking",
+    "read_tracking": "stl_lfd.optim.tracking",
 }
 
 __all__, __getattr__, __dir__ = lazy_exports("stl_lfd", _HOMES, globals())

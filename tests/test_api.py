@@ -27,7 +27,7 @@ def api_page_python_blocks() -> list[str]:
 @pytest.mark.slow
 def test_the_api_page_python_examples_run(monkeypatch, capsys):
     blocks = api_page_python_blocks()
-    assert len(blocks) == 4
+    assert len(blocks) == 5
     monkeypatch.chdir(ROOT)
     namespace: dict = {}
     for block in blocks:

@@ -6,6 +6,7 @@
     objective.py                         a point -> adapted skill -> rollout -> robustness of parts
     trials.py                            `Trial`, `Outcome`, and the observations methods learn from
     loop.py                              the thin loop: ask the method for a batch, execute, record
+    tracking.py                          how the run's robot follows its plans (method plan's)
     methods/                             one class per search method (plan, stl, pi, logei, random)
                                          behind `SearchMethod.propose(request)`, found by name
     runs/                                run directories, start and resume, recording, ask/tell,
