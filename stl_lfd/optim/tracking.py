@@ -57,7 +57,8 @@ class RunTracking:
             number for number in [0, *(trial.trial for trial in history if trial.robustness is not None)] if self._execution(number, history) is not None
         )
         if self._latest is None or self._latest[0] != numbers:
-            model = TrackingModel().fit([self._executions[number] for number in numbers]) if numbers else TrackingModel()
+            executions = [self._executions[number] for number in numbers]
+            model = TrackingModel().fit(executions, plan_within=FOLLOWS_THE_PLAN) if numbers else TrackingModel()
             self._latest = (numbers, model)
             self._write(numbers, model)
         return self._latest

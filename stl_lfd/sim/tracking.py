@@ -68,13 +68,18 @@ class TrackingModel:
     plan_rms_: np.ndarray = field(default_factory=lambda: np.zeros(3))
     executions_: int = 0
 
-    def fit(self, executions: list[Execution]) -> "TrackingModel":
-        """Choose and fit the kind that predicts held-out executions best."""
+    def fit(self, executions: list[Execution], plan_within: float = 0.0) -> "TrackingModel":
+        """Choose and fit the kind that predicts held-out executions best; the plan itself,
+        without fitting the others, when it predicts every axis within `plan_within` (m RMS)."""
         if not executions:
             raise ValueError("a tracking model needs at least one execution")
-        clocks = {"plan": 1.0, "offset": 1.0, "filter": 1.0, "clocked filter": _best_clock(executions)}
-        fits = {kind: _Fit(kind, executions, clocks[kind]) for kind in KINDS}
-        self.kind_ = min(KINDS, key=lambda kind: float(np.sum(fits[kind].heldout_rms ** 2)))
+        plan = _Fit("plan", executions, 1.0)
+        if np.max(plan.heldout_rms) <= plan_within:
+            fits = {"plan": plan}
+        else:
+            clocks = {"plan": 1.0, "offset": 1.0, "filter": 1.0, "clocked filter": _best_clock(executions)}
+            fits = {kind: plan if kind == "plan" else _Fit(kind, executions, clocks[kind]) for kind in KINDS}
+        self.kind_ = min(fits, key=lambda kind: float(np.sum(fits[kind].heldout_rms ** 2)))
         chosen = fits[self.kind_]
         self.clock_, self.weights_, self.offsets_ = chosen.clock, chosen.weights, chosen.offsets
         self.heldout_rms_, self.plan_rms_ = chosen.heldout_rms, fits["plan"].heldout_rms

@@ -77,3 +77,9 @@ def test_the_predicting_backend_records_the_predicted_positions():
 def test_fitting_needs_an_execution():
     with pytest.raises(ValueError, match="at least one execution"):
         TrackingModel().fit([])
+
+
+def test_a_plan_good_enough_is_kept_without_fitting_the_rest():
+    almost = [executed(seed, sag=0.0004) for seed in range(2)]
+    assert TrackingModel().fit(almost, plan_within=0.001).kind_ == "plan"
+    assert TrackingModel().fit(almost).kind_ == "offset"
