@@ -682,7 +682,8 @@ def report(
     has the data: trajectories.png (paths from above and from the side), region_distances.png,
     robustness.png, components.png (each part of the spec and what they compose to),
     gp_slices.png, transitions.png (when transitions are optimised), durations.png, forces.png
-    (when something was touched), tilt.png (when the hand turned), compare.png (--compare).
+    (when something was touched), tilt.png (when the hand turned), tracking.png (how the
+    robot followed its plans, when the run learned it), compare.png (--compare).
     The paths of the files go to stdout. For a folder of 'stlopt sweep': its table (stdout) and
     sweep.png, redrawn from its runs.
 
