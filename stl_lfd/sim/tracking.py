@@ -200,8 +200,11 @@ def _solve(gram: np.ndarray, moment: np.ndarray) -> np.ndarray:
     reduced = lags - np.outer(cross, cross) / offset_gram
     reduced_moment = moment[:-1] - cross * moment[-1] / offset_gram
     reduced += np.eye(len(reduced)) * 1e-12 * max(np.trace(reduced), 1e-300)
-    upper = np.linalg.cholesky(reduced).T  # reduced = upper' upper
-    weights, _ = nnls(upper, np.linalg.solve(upper.T, reduced_moment))
+    try:
+        upper = np.linalg.cholesky(reduced).T  # reduced = upper' upper
+        weights, _ = nnls(upper, np.linalg.solve(upper.T, reduced_moment))
+    except np.linalg.LinAlgError:  # lags that carry nothing at all (a reference that never moves)
+        weights = np.zeros(len(reduced))
     offset = (moment[-1] - cross @ weights) / offset_gram
     return np.append(weights, offset)
 

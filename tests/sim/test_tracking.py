@@ -83,3 +83,10 @@ def test_a_plan_good_enough_is_kept_without_fitting_the_rest():
     almost = [executed(seed, sag=0.0004) for seed in range(2)]
     assert TrackingModel().fit(almost, plan_within=0.001).kind_ == "plan"
     assert TrackingModel().fit(almost).kind_ == "offset"
+
+
+def test_a_reference_that_never_moves_still_gives_a_model():
+    times = np.arange(0, 5, 0.01)
+    still = np.tile([0.4, 0.1, 0.4], (len(times), 1))
+    model = TrackingModel().fit([Execution(times, still, times, still + [0, 0, -0.01]), Execution(times, still, times, still + [0, 0, -0.012])])
+    assert model.predict(times, still, times)[:, 2] == pytest.approx(0.4 - 0.011)
