@@ -93,6 +93,15 @@ def write_signal_csv(table: SignalTable, destination: str | Path | TextIO, digit
         stream.write(body.getvalue())
 
 
+def as_written(table: SignalTable, digits: int = 12) -> SignalTable:
+    """`table` as `write_signal_csv` (with `digits`) and `read_signal_csv` give it back."""
+
+    def rounded(values: np.ndarray) -> np.ndarray:
+        return np.char.mod(f"%.{digits}g", np.asarray(values, dtype=float)).astype(float)
+
+    return SignalTable(rounded(table.times), {name: rounded(values) for name, values in table.columns.items()}, source=table.source)
+
+
 # --- Helper functions -----------------------------------------------------------------------
 
 

@@ -87,8 +87,8 @@ class RunTracking:
 
 def used(model: TrackingModel) -> bool:
     """Whether method plan scores plans through `model`: when the robot departs from the plan
-    by more than FOLLOWS_THE_PLAN on some axis."""
-    return bool(np.max(model.plan_rms_) > FOLLOWS_THE_PLAN)
+    by more than FOLLOWS_THE_PLAN on some axis and the model predicts better than the plan."""
+    return bool(np.max(model.plan_rms_) > FOLLOWS_THE_PLAN and model.kind_ != "plan")
 
 
 def execution_of(objective: SkillObjective, models: dict[str, HSMM], signals: SignalTable) -> Execution:

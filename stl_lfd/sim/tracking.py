@@ -28,12 +28,15 @@ from scipy.signal import lfilter
 
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.kinematic import KinematicBackend
-from stl_lfd.sim.reference import Reference, Rollout
+from stl_lfd.sim.reference import Reference, Rollout, recording_times
 from stl_lfd.sim.scene import Scene
 
 LAGS = (0.0, 0.03, 0.1, 0.2, 0.3, 0.5, 1.0)  # seconds: time constants of the filter bank (0: the reference itself)
 CLOCKS = np.linspace(0.6, 1.4, 9)  # reference seconds per executed second: the clocked model's coarse grid
-KINDS = ("plan", "offset", "filter", "clocked filter")  # simplest first: a tie keeps the simplest
+KINDS = ("plan", "offset", "filter", "clocked filter")  # simplest first
+# A kind with more parameters is kept only when it predicts better by more than this fraction
+# (with one execution its error is in-sample, where more parameters always fit a little better).
+BETTER_BY = 0.01
 
 
 @dataclass
@@ -79,7 +82,7 @@ class TrackingModel:
         else:
             clocks = {"plan": 1.0, "offset": 1.0, "filter": 1.0, "clocked filter": _best_clock(executions)}
             fits = {kind: plan if kind == "plan" else _Fit(kind, executions, clocks[kind]) for kind in KINDS}
-        self.kind_ = min(fits, key=lambda kind: float(np.sum(fits[kind].heldout_rms ** 2)))
+        self.kind_ = _simplest_best(fits)
         chosen = fits[self.kind_]
         self.clock_, self.weights_, self.offsets_ = chosen.clock, chosen.weights, chosen.offsets
         self.heldout_rms_, self.plan_rms_ = chosen.heldout_rms, fits["plan"].heldout_rms
@@ -118,6 +121,13 @@ class TrackingModel:
             plan_rms_=np.asarray(data["plan_rms"], dtype=float),
             executions_=int(data["executions"]),
         )
+
+
+def _simplest_best(fits: dict[str, "_Fit"]) -> str:
+    """The simplest kind whose squared error is within BETTER_BY of the best one's."""
+    errors = {kind: float(np.sum(fit.heldout_rms**2)) for kind, fit in fits.items()}
+    best = min(errors.values())
+    return next(kind for kind in KINDS if kind in errors and errors[kind] <= best * (1 + BETTER_BY) + 1e-18)
 
 
 def _identity_weights() -> np.ndarray:
@@ -204,7 +214,7 @@ def _solve(gram: np.ndarray, moment: np.ndarray) -> np.ndarray:
         upper = np.linalg.cholesky(reduced).T  # reduced = upper' upper
         weights, _ = nnls(upper, np.linalg.solve(upper.T, reduced_moment))
     except np.linalg.LinAlgError:  # lags that carry nothing at all (a reference that never moves)
-        weights = np.zeros(len(reduced))
+        weights = np.eye(1, len(reduced))[0]  # the reference itself
     offset = (moment[-1] - cross @ weights) / offset_gram
     return np.append(weights, offset)
 
@@ -236,8 +246,10 @@ def _in_sample(executions: list[Execution], clock: float) -> float:
 
 
 class PredictingBackend(KinematicBackend):
-    """The kinematic backend with the robot's tracking: what `model` predicts a robot records
-    when it executes the reference (orientations, gripper and carried frames as planned)."""
+    """The kinematic backend with the robot's tracking: it records what `model` predicts a robot
+    does when it executes the reference. The hand's positions are the prediction; orientation,
+    gripper, grasps and releases follow the robot's clock (`model.clock_`), and carried objects
+    move with the predicted hand."""
 
     plays_the_plan = False
 
@@ -245,9 +257,26 @@ class PredictingBackend(KinematicBackend):
         self.model = model
 
     def run(self, reference: Reference, scene: Scene, rate: float, observer: Callable | None = None) -> Rollout:
-        planned = super().run(reference, scene, rate, observer)
-        times, columns = planned.signals.times, dict(planned.signals.columns)
-        predicted = self.model.predict(reference.times, reference.positions, times)
-        columns.update(zip("xyz", predicted.T))
+        predicted = super().run(self.predicted(reference, rate), scene, rate, observer)
         # a prediction, not an execution: its departure from the reference is no tracking error to warn about
-        return Rollout(SignalTable(times, columns, source="predicted execution"), np.zeros(times.size))
+        return Rollout(SignalTable(predicted.signals.times, predicted.signals.columns, source="predicted execution"), np.zeros(predicted.signals.samples))
+
+    def predicted(self, reference: Reference, rate: float) -> Reference:
+        """The execution the model predicts, as a reference sampled at `rate` over the same
+        duration: what the kinematic backend then records as is."""
+        times = recording_times(reference.duration, rate)
+        clock = self.model.clock_
+        on_clock = np.clip(clock * times, reference.times[0], reference.times[-1])
+
+        def labels(values: np.ndarray | None) -> np.ndarray | None:
+            return None if values is None else np.asarray(values)[np.searchsorted(reference.times, on_clock, side="right") - 1]
+
+        return Reference(
+            times,
+            self.model.predict(reference.times, reference.positions, times),
+            gripper=None if reference.gripper is None else np.interp(on_clock, reference.times, reference.gripper),
+            events=tuple((time / clock, action) for time, action in reference.events if time / clock <= times[-1]),
+            skills=labels(reference.skills),
+            states=labels(reference.states),
+            orientations=None if reference.orientations is None else reference.orientations_at(on_clock),
+        )

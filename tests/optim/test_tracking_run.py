@@ -81,7 +81,7 @@ def test_plans_go_through_the_model_only_where_the_robot_departs_from_them():
     from stl_lfd.sim.tracking import TrackingModel
 
     assert not used(TrackingModel(plan_rms_=np.array([0.3, 0.2, 0.9]) * FOLLOWS_THE_PLAN))  # PyBullet: hundredths of a mm
-    assert used(TrackingModel(plan_rms_=np.array([0.0, 0.0, 2.0]) * FOLLOWS_THE_PLAN))
+    assert used(TrackingModel(kind_="offset", plan_rms_=np.array([0.0, 0.0, 2.0]) * FOLLOWS_THE_PLAN))
 
 
 @pytest.mark.slow
@@ -89,3 +89,20 @@ def test_a_backend_that_plays_the_plan_learns_no_tracking(tmp_path, learned_mode
     folder = tmp_path / "run"
     finish_run(start_run(plan_task(tmp_path, learned_model_file, 3), folder))
     assert not (folder / TRACKING_FILE).exists()
+
+
+def test_a_model_that_is_the_plan_is_not_used_however_far_the_robot_strays():
+    from stl_lfd.sim.tracking import TrackingModel
+
+    assert not used(TrackingModel(kind_="plan", plan_rms_=np.array([0.0, 0.0, 2.0]) * FOLLOWS_THE_PLAN))  # noise alone
+
+
+def test_a_run_in_memory_learns_from_its_signals_as_a_run_directory_keeps_them(tmp_path):
+    from stl_lfd.optim.runs.store import MemoryRun
+    from stl_lfd.signals import read_signal_csv, write_signal_csv
+
+    signals = SignalTable(np.arange(50) / 50, {name: np.random.default_rng(1).normal(size=50) / 3 for name in "xyz"})
+    write_signal_csv(signals, tmp_path / "signals.csv")
+    on_disk, in_memory = read_signal_csv(tmp_path / "signals.csv"), MemoryRun(signals).recorded_signals(0)
+    assert np.array_equal(in_memory.times, on_disk.times)
+    assert all(np.array_equal(in_memory.columns[name], on_disk.columns[name]) for name in "xyz")

@@ -90,3 +90,19 @@ def test_a_reference_that_never_moves_still_gives_a_model():
     still = np.tile([0.4, 0.1, 0.4], (len(times), 1))
     model = TrackingModel().fit([Execution(times, still, times, still + [0, 0, -0.01]), Execution(times, still, times, still + [0, 0, -0.012])])
     assert model.predict(times, still, times)[:, 2] == pytest.approx(0.4 - 0.011)
+
+
+def test_more_parameters_only_where_they_predict_better():
+    sagging = [executed(0, sag=0.01)]  # one execution: errors are in-sample, where the bank fits a hair better
+    assert TrackingModel().fit(sagging).kind_ == "offset"
+    assert TrackingModel().fit([executed(0, lag=0.2)]).kind_ in ("filter", "clocked filter")
+
+
+def test_a_slow_robot_grasps_later_and_holds_its_gripper_on_its_clock():
+    times, positions = reference(2)
+    gripper = np.where(times < 3.0, 0.08, 0.0)
+    slow = TrackingModel(kind_="clocked filter", clock_=0.5)
+    predicted = PredictingBackend(slow).predicted(Reference(times, positions, gripper=gripper, events=((3.0, "grasp"), (9.0, "release"))), RATE)
+    assert predicted.events == ((6.0, "grasp"),)  # the release comes after the recording ends
+    assert predicted.gripper[predicted.times < 5.9] == pytest.approx(0.08) and predicted.gripper[predicted.times > 6.1] == pytest.approx(0.0)
+    assert predicted.positions[-1] == pytest.approx(positions[np.searchsorted(times, 6.0)], abs=1e-3)

@@ -11,7 +11,7 @@ from stl_lfd.hsmm import HSMM
 from stl_lfd.optim.runs.directory import RunDirectory
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.trials import Trial
-from stl_lfd.signals import SignalTable
+from stl_lfd.signals import SignalTable, as_written
 
 
 class RunStore(Protocol):
@@ -53,8 +53,11 @@ class MemoryRun:
             self.signals[trial.trial] = signals
 
     def recorded_signals(self, trial: int) -> SignalTable | None:
-        """The signals trial `trial` recorded (0: the unoptimised skill), None if it has none."""
-        return self.signals.get(trial)
+        """The signals trial `trial` recorded (0: the unoptimised skill), None if it has none,
+        to the digits a run directory keeps (so that a run in memory learns what a recorded
+        one learns)."""
+        signals = self.signals.get(trial)
+        return as_written(signals) if signals is not None else None
 
     def write_best_models(self, models: dict[str, HSMM]) -> None:
         self.best_models = models
