@@ -20,7 +20,7 @@ LEFT_OUT = {
     "gp_slices": "fewer than three trials finished",
     "forces": "no trial touched anything (the contact force was zero throughout)",
     "tilt": "no trial turned the hand by more than a degree",
-    "tracking": "the run learned no tracking model (its backend plays the plan back, or its method is not plan)",
+    "tracking": "the run learned no tracking model (its backend plays the plan back, it has several object placements, or its method is not plan)",
 }
 
 
