@@ -86,7 +86,9 @@ def test_several_placements_score_the_worst_and_record_each(tmp_path):
 
     report = CliRunner().invoke(app, ["report", str(tmp_path / "run"), "--out", str(tmp_path / "report")])
     assert report.exit_code == 0, report.stderr
-    assert (tmp_path / "report" / "components.png").is_file() and (tmp_path / "report" / "transitions.png").is_file()
+    assert (tmp_path / "report" / "components.png").is_file()
+    assert not (tmp_path / "report" / "transitions.png").exists()  # only the insert's means move
+    assert "transitions.png</b>: the transitions were not optimised" in (tmp_path / "report" / "index.html").read_text()
 
 
 @pytest.mark.parametrize(
