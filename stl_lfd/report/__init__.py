@@ -36,7 +36,7 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
         ("robustness", figures.robustness_per_trial(run)),
         ("components", figures.component_robustness(run)),
         ("gp_slices", figures.gp_slices(run, gp_parameters)),
-        ("transitions", figures.transition_graphs(run) if run.transitions_optimised else None),
+        ("transitions", figures.transition_graphs(run)),
         ("durations", figures.durations_per_trial(run)),
         ("forces", figures.contact_forces(run)),
         ("tilt", figures.tilt(run)),

@@ -305,10 +305,13 @@ def _most_relevant(model, names: list[str], count: int) -> list[str]:
     return [names[index] for index in np.argsort(lengthscales)[:count]]
 
 
-def transition_graphs(run: RunData) -> Figure:
-    """The skill's states and transitions before and after optimisation: edge width by
-    probability, the state sequence followed by the retrieval highlighted."""
-    skills = [skill for skill, part in run.space.parts.items() if part.transition_slots] or list(run.models)
+def transition_graphs(run: RunData) -> Figure | None:
+    """The states and transitions before and after optimisation of each skill whose transitions
+    are optimised (None when none is): edge width by probability, the state sequence followed
+    by the retrieval highlighted."""
+    skills = [skill for skill, part in run.space.parts.items() if part.transition_slots]
+    if not skills:
+        return None
     figure = Figure(figsize=(12, 3.6 * len(skills)), layout="constrained")
     rows = figure.subplots(len(skills), 2, squeeze=False)
     best_models = run.best_models()
@@ -423,6 +426,7 @@ def tracking(run: RunData) -> Figure | None:
     if run.tracking is None or run.best is None or run.best.trial not in run.signals:
         return None
     from stl_lfd.optim.objective import objective_for
+    from stl_lfd.optim.tracking import execution_of
 
     _, objective = objective_for(run.task, run.models, execute=False)
     model = run.tracking.model
@@ -430,12 +434,13 @@ def tracking(run: RunData) -> Figure | None:
     points = {0: run.space.initial, **{trial.trial: trial.x for trial in run.trials}}
     errors = {}
     for number in numbers:
-        table, reference = run.signals[number], objective.reference(run.space.apply(run.models, points[number]))
-        executed = np.column_stack([table.columns[axis] for axis in "xyz"])
-        planned, predicted = reference.positions_at(table.times), model.predict(reference.times, reference.positions, table.times)
+        execution = execution_of(objective, run.space.apply(run.models, points[number]), run.signals[number])
+        times, executed = execution.times, execution.positions
+        planned = np.column_stack([np.interp(times, execution.reference_times, axis) for axis in execution.reference_positions.T])
+        predicted = model.predict(execution.reference_times, execution.reference_positions, times)
         errors[number] = (_rms(planned - executed), _rms(predicted - executed))
         if number == run.best.trial:
-            best = (table.times, executed, planned, predicted)
+            best = (times, executed, planned, predicted)
     figure = Figure(figsize=(12, 6.5), layout="constrained")
     grid = figure.add_gridspec(3, 2, width_ratios=[3, 2])
     times, executed, planned, predicted = best

@@ -53,10 +53,6 @@ class RunData:
         number = self.summary.best_trial
         return next((trial for trial in self.trials if trial.trial == number), None)
 
-    @property
-    def transitions_optimised(self) -> bool:
-        return any(part.transition_slots for part in self.space.parts.values())
-
     def best_models(self) -> dict[str, HSMM]:
         best = self.best
         return self.space.apply(self.models, best.x) if best is not None else self.models

@@ -48,6 +48,9 @@ class Execution:
     reference_positions: np.ndarray
     times: np.ndarray
     positions: np.ndarray
+    # kind -> its normal equations on the reference's own clock, computed once (every refit of a
+    # run uses them again)
+    equations: dict = field(default_factory=dict, repr=False, compare=False)
 
 
 @dataclass
@@ -150,23 +153,27 @@ def _filter_bank(reference_times: np.ndarray, positions: np.ndarray, times: np.n
 
 
 class _Fit:
-    """One kind fitted by least squares at one clock, on all executions (`weights`, `offsets`)
-    and leaving each out in turn (`heldout_rms`: `3` RMS errors per axis; in-sample with one
-    execution), from each execution's normal equations."""
+    """One kind fitted by least squares at one clock, on all executions (`weights`, `offsets`,
+    `residual`: the sum of squared residuals) and, with `heldout`, leaving each out in turn
+    (`heldout_rms`: `3` RMS errors per axis; in-sample with one execution), from each
+    execution's normal equations."""
 
-    def __init__(self, kind: str, executions: list[Execution], clock: float) -> None:
+    def __init__(self, kind: str, executions: list[Execution], clock: float, heldout: bool = True) -> None:
         self.clock = clock
         equations = [_normal_equations(kind, execution, clock) for execution in executions]  # each: 3 x (G, b, c, n)
-        self.weights, self.offsets = _identity_weights(), np.zeros(3)
+        self.weights, self.offsets, self.residual = _identity_weights(), np.zeros(3), 0.0
         squared, count = np.zeros(3), sum(len(execution.times) for execution in executions)
         for axis in range(3):
             per_execution = [equation[axis] for equation in equations]
             gram, moment = sum(e[0] for e in per_execution), sum(e[1] for e in per_execution)
             solution = _solve(gram, moment)
             self._store(kind, axis, solution)
+            self.residual += _squared_error(solution, gram, moment, sum(e[2] for e in per_execution))
+            if not heldout:
+                continue
             for own_gram, own_moment, own_square, _ in per_execution:
                 held = _solve(gram - own_gram, moment - own_moment) if len(executions) > 1 else solution
-                squared[axis] += max(own_square - 2 * held @ own_moment + held @ own_gram @ held, 0.0)
+                squared[axis] += _squared_error(held, own_gram, own_moment, own_square)
         self.heldout_rms = np.sqrt(squared / count)
 
     def _store(self, kind: str, axis: int, solution: np.ndarray) -> None:
@@ -176,11 +183,25 @@ class _Fit:
             self.weights[axis], self.offsets[axis] = solution[:-1], solution[-1]
 
 
+def _squared_error(weights: np.ndarray, gram: np.ndarray, moment: np.ndarray, square: float) -> float:
+    """`|D w - y|^2` from the normal equations (`D'D`, `D'y`, `y'y`)."""
+    return max(square - 2 * weights @ moment + weights @ gram @ weights, 0.0)
+
+
 def _normal_equations(kind: str, execution: Execution, clock: float) -> list[tuple[np.ndarray, np.ndarray, float, int]]:
     """Per axis, `(D'D, D'y, y'y, T)` of `kind`'s least-squares problem `D w = y` on one
     execution: y the execution relative to the reference's start, less the reference itself
-    where the reference passes through unweighted (plan, offset)."""
-    bank = _filter_bank(execution.reference_times, execution.reference_positions, execution.times, clock)
+    where the reference passes through unweighted (plan, offset). On the reference's own clock
+    they are computed once per execution."""
+    if clock != 1.0:
+        return _equations_of(kind, _filter_bank(execution.reference_times, execution.reference_positions, execution.times, clock), execution)
+    if kind not in execution.equations:
+        bank = _filter_bank(execution.reference_times, execution.reference_positions, execution.times, 1.0)
+        execution.equations.update({name: _equations_of(name, bank, execution) for name in ("plan", "offset", "filter")})
+    return execution.equations["filter" if kind == "clocked filter" else kind]
+
+
+def _equations_of(kind: str, bank: np.ndarray, execution: Execution) -> list[tuple[np.ndarray, np.ndarray, float, int]]:
     relative = execution.positions - execution.reference_positions[0]
     equations = []
     for axis in range(3):
@@ -225,24 +246,12 @@ def _best_clock(executions: list[Execution]) -> float:
     from scipy.optimize import minimize_scalar
 
     def residual(clock: float) -> float:
-        return _in_sample(executions, clock)
+        return _Fit("filter", executions, clock, heldout=False).residual
 
     coarse = min(CLOCKS, key=residual)
     step = CLOCKS[1] - CLOCKS[0]
     found = minimize_scalar(residual, bounds=(coarse - step, coarse + step), method="bounded", options={"xatol": 1e-4})
     return float(found.x) if found.fun < residual(coarse) else float(coarse)
-
-
-def _in_sample(executions: list[Execution], clock: float) -> float:
-    """The filter bank's sum of squared residuals at `clock`, fitted on all `executions`."""
-    equations = [_normal_equations("filter", execution, clock) for execution in executions]
-    total = 0.0
-    for axis in range(3):
-        gram, moment = sum(e[axis][0] for e in equations), sum(e[axis][1] for e in equations)
-        square = sum(e[axis][2] for e in equations)
-        solution = _solve(gram, moment)
-        total += max(square - 2 * solution @ moment + solution @ gram @ solution, 0.0)
-    return total
 
 
 class PredictingBackend(KinematicBackend):
