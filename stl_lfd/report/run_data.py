@@ -12,7 +12,7 @@ from stl_lfd.optim import RunDirectory, SearchSpace, Task, Trial, build_search_s
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.tracking import RunTrackingRecord, read_tracking
 from stl_lfd.optim.trials import observations
-from stl_lfd.signals import SignalTable, read_signal_csv
+from stl_lfd.signals import SignalTable
 from stl_lfd.stl import ast, load_spec
 from stl_lfd.stl.regions import region_boxes
 
@@ -73,11 +73,8 @@ def load_run(path: Path) -> RunData:
         order = [step.name for step in load_behaviour(task.behaviour).skills]
         models = {name: models[name] for name in order if name in models}
     trials = run.trials()
-    signals = {}
-    for number in [0] + [trial.trial for trial in trials]:
-        file = run.signals_path(number)
-        if file.exists():
-            signals[number] = read_signal_csv(file)
+    recorded = {number: run.recorded_signals(number) for number in [0] + [trial.trial for trial in trials]}
+    signals = {number: table for number, table in recorded.items() if table is not None}
     spec = load_spec(task.spec)
     return RunData(
         path=Path(path),
