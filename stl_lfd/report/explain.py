@@ -7,8 +7,6 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-import numpy as np
-
 from stl_lfd.optim.settings import SINGLE_SKILL, Optimizer, Parameters
 from stl_lfd.report.run_data import RunData
 
@@ -113,8 +111,8 @@ def _states(components: tuple[int, ...] | str) -> str:
 def commands(run: RunData) -> list[tuple[str, str]]:
     """`(command, what it does)`: watch the best trial, continue the run, redraw this report
     (paths relative to the working directory when the run lies in it, else all absolute)."""
-    relative = not Path(_shown_path(run.path)).is_absolute()
     path = _shown_path(run.path)
+    relative = not Path(path).is_absolute()
     found = []
     if run.best is not None:
         trial = run.best.trial
@@ -214,10 +212,10 @@ def _drawn_regions(run: RunData) -> bool:
 
 
 def _best_turns_the_hand(run: RunData) -> bool:
-    from stl_lfd.report.figures import TURNING
+    from stl_lfd.report.figures import turns_the_hand
 
     table = run.signals.get(run.best.trial) if run.best is not None else None
-    return table is not None and "tilt" in table.columns and float(np.max(table.columns["tilt"])) >= TURNING
+    return table is not None and turns_the_hand(table)
 
 
 def _components_caption(run: RunData) -> str:

@@ -102,10 +102,16 @@ def _end_markers() -> list:
     return [Line2D([], [], marker="o", color="0.3", ls="none", label="start"), Line2D([], [], marker="s", color="0.3", ls="none", label="end")]
 
 
+def turns_the_hand(table) -> bool:
+    """Whether a recording turns the hand by a degree or more (and says how: quaternions), so
+    that its approach axis is worth drawing."""
+    return set(QUATERNION_COLUMNS) <= set(table.columns) and "tilt" in table.columns and bool(np.max(table.columns["tilt"]) >= TURNING)
+
+
 def _approach_axes(axes, table, across: str = "x", up: str = "y", count: int = 12, length: float = 0.03) -> None:
     """Arrows along a path that turns the hand: its approach axis (the gripper's z) at `count`
     instants, projected on the view's plane (`across`, `up`)."""
-    if not set(QUATERNION_COLUMNS) <= set(table.columns) or "tilt" not in table.columns or np.max(table.columns["tilt"]) < TURNING:
+    if not turns_the_hand(table):
         return
     at = np.linspace(0, table.samples - 1, count).astype(int)
     approach = rotations.to_matrix(np.column_stack([table.columns[name][at] for name in QUATERNION_COLUMNS]))[:, :, 2]
