@@ -4,6 +4,7 @@ recorded signals and of the spec's parts; and its plan (the same on the kinemati
 from __future__ import annotations
 
 import copy
+from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Sequence
@@ -26,6 +27,10 @@ from stl_lfd.skill.placed import PlacedSkill, placed_scene
 from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
 
 
+# How many points' references `plan_references` keeps: twice method plan's pool of candidates.
+PLANNED_REFERENCES = 256
+
+
 class SkillObjective:
     """x -> adapted models -> (behaviour) reference -> rollout -> robustness of the recorded
     signals and of the spec's top-level parts (payload: the signals). It owns its backend (one
@@ -44,6 +49,7 @@ class SkillObjective:
         self.placed = [PlacedSkill(models, behaviour, scene, task.duration) for scene in scenes]  # one per placement
         self.scene = scenes[0]
         self.backend = backend
+        self._references: OrderedDict[bytes, list[Reference]] = OrderedDict()  # see plan_references
         # The parts the search method models: the spec's, or the spec's at each placement.
         self.composition = spec_composition(parts) if len(scenes) == 1 else placement_composition(parts, task.placements)
 
@@ -81,10 +87,27 @@ class SkillObjective:
         planned, routes = self.planned(tracking), self.composition.route_names
 
         def score(points: np.ndarray) -> np.ndarray:
-            outcomes = planned.evaluate_all([self.space.apply(self.models, x) for x in points])
+            outcomes = planned.evaluate_all([self.space.apply(self.models, x) for x in points], self.plan_references(points))
             return np.array([list(outcome.components.values()) + [outcome.routes[route] for route in routes] for outcome in outcomes], dtype=float)
 
         return score
+
+    def plan_references(self, points: np.ndarray) -> list[list[Reference]]:
+        """The references of `b x d` points at each placement (placement x point), those not
+        among the latest PLANNED_REFERENCES retrieved together: the plan scores of successive
+        tracking models share them (a point's reference does not depend on the model)."""
+        keys = [np.asarray(point, dtype=float).tobytes() for point in points]
+        new = list(dict.fromkeys(key for key in keys if key not in self._references))
+        if new:
+            models = [self.space.apply(self.models, np.frombuffer(key)) for key in new]
+            retrieved = [placed.references(models) for placed in self.placed]
+            for index, key in enumerate(new):
+                self._references[key] = [references[index] for references in retrieved]
+        for key in keys:
+            self._references.move_to_end(key)
+        while len(self._references) > PLANNED_REFERENCES:
+            self._references.popitem(last=False)
+        return [[self._references[key][placement] for key in keys] for placement in range(len(self.placed))]
 
     def reference(self, models: dict[str, HSMM]) -> Reference:
         """What executing `models` means at the first placement (see `PlacedSkill.reference`)."""
@@ -96,14 +119,16 @@ class SkillObjective:
             self.backend.trial = trial
         return self.evaluate_all([models])[0]
 
-    def evaluate_all(self, models: Sequence[dict[str, HSMM]]) -> list[Outcome]:
-        """`evaluate` N sets of models: their references retrieved together, then executed and
-        scored one after the other."""
+    def evaluate_all(self, models: Sequence[dict[str, HSMM]], references: list[list[Reference]] | None = None) -> list[Outcome]:
+        """`evaluate` N sets of models: their references (placement x model, retrieved together
+        unless given) executed one after the other, then scored together."""
         if self.backend is None:
             raise ExecutionError("this objective only scores signals recorded elsewhere (it has no backend)")
+        if references is None:
+            references = [placed.references(models) for placed in self.placed]
         placements = [
-            [self.score(placed.execute(self.backend, self.task.rate, reference=reference).signals) for reference in placed.references(models)]
-            for placed in self.placed
+            self.score_all([placed.execute(self.backend, self.task.rate, reference=reference).signals for reference in placement_references])
+            for placed, placement_references in zip(self.placed, references)
         ]
         return [self._worst([outcomes[index] for outcomes in placements]) for index in range(len(models))]
 
@@ -118,13 +143,32 @@ class SkillObjective:
 
     def score(self, signals: SignalTable) -> Outcome:
         """The robustness of recorded `signals`, and of each of the spec's parts."""
-        missing = sorted(self.parts.signals - set(signals.columns))
-        if missing:
-            raise SignalError(f"{signals.source}: no column {', '.join(missing)}, which the spec needs")
-        # The spec is evaluated once, part by part; composing the parts is exactly its robustness.
-        values = self.parts(signals.columns, signals.times)
-        routes = self.parts.route_values(signals.columns, signals.times) or None
-        return Outcome(self.parts.compose(values), signals, dict(zip(self.parts.names, values.tolist())), routes)
+        return self.score_all([signals])[0]
+
+    def score_all(self, recordings: Sequence[SignalTable]) -> list[Outcome]:
+        """`score` each of the `recordings`; those on the same sample times as a `B x T` batch."""
+        for signals in recordings:
+            missing = sorted(self.parts.signals - set(signals.columns))
+            if missing:
+                raise SignalError(f"{signals.source}: no column {', '.join(missing)}, which the spec needs")
+        outcomes: list[Outcome | None] = [None] * len(recordings)
+        groups: dict[bytes, list[int]] = {}
+        for index, signals in enumerate(recordings):
+            groups.setdefault(np.asarray(signals.times).tobytes(), []).append(index)
+        for indices in groups.values():
+            batch = {name: np.stack([recordings[index].columns[name] for index in indices]) for name in self.parts.signals}
+            times = recordings[indices[0]].times
+            # The spec is evaluated once, part by part; composing the parts is exactly its robustness.
+            values = np.atleast_2d(self.parts(batch, times))
+            routes = self.parts.route_values(batch, times)
+            for row, index in enumerate(indices):
+                outcomes[index] = Outcome(
+                    self.parts.compose(values[row]),
+                    recordings[index],
+                    dict(zip(self.parts.names, values[row].tolist())),
+                    {name: float(value[row]) for name, value in routes.items()} or None,
+                )
+        return outcomes
 
 
 def task_models(task: Task) -> dict[str, HSMM]:

@@ -48,8 +48,8 @@ class Execution:
     reference_positions: np.ndarray
     times: np.ndarray
     positions: np.ndarray
-    # kind -> its normal equations on the reference's own clock, computed once (every refit of a
-    # run uses them again)
+    # (kind, clock) -> its normal equations on the reference's own clock and the coarse grid's,
+    # computed once (every refit of a run uses them again)
     equations: dict = field(default_factory=dict, repr=False, compare=False)
 
 
@@ -192,13 +192,16 @@ def _normal_equations(kind: str, execution: Execution, clock: float) -> list[tup
     """Per axis, `(D'D, D'y, y'y, T)` of `kind`'s least-squares problem `D w = y` on one
     execution: y the execution relative to the reference's start, less the reference itself
     where the reference passes through unweighted (plan, offset). On the reference's own clock
-    they are computed once per execution."""
-    if clock != 1.0:
-        return _equations_of(kind, _filter_bank(execution.reference_times, execution.reference_positions, execution.times, clock), execution)
-    if kind not in execution.equations:
-        bank = _filter_bank(execution.reference_times, execution.reference_positions, execution.times, 1.0)
-        execution.equations.update({name: _equations_of(name, bank, execution) for name in ("plan", "offset", "filter")})
-    return execution.equations["filter" if kind == "clocked filter" else kind]
+    and the clocks of the coarse grid they are computed once per execution."""
+    kind = "filter" if kind == "clocked filter" else kind
+    if (kind, clock) in execution.equations:
+        return execution.equations[kind, clock]
+    bank = _filter_bank(execution.reference_times, execution.reference_positions, execution.times, clock)
+    if clock != 1.0 and clock not in CLOCKS:
+        return _equations_of(kind, bank, execution)
+    kinds = ("plan", "offset", "filter") if clock == 1.0 else ("filter",)
+    execution.equations.update({(name, clock): _equations_of(name, bank, execution) for name in kinds})
+    return execution.equations[kind, clock]
 
 
 def _equations_of(kind: str, bank: np.ndarray, execution: Execution) -> list[tuple[np.ndarray, np.ndarray, float, int]]:

@@ -78,9 +78,10 @@ class SpecParts:
         """`m` robustness values of the parts at the first sample (`B x m` for a batch)."""
         return np.stack([np.asarray(function(signals, times), dtype=float) for function in self.functions], axis=-1)
 
-    def route_values(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> dict[str, float]:
-        """The robustness of each route (its text -> value) at the first sample."""
-        return {route.name: float(route.function(signals, times)) for route in self.routes}
+    def route_values(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> dict[str, float | np.ndarray]:
+        """The robustness of each route (its text -> value) at the first sample (`B` values
+        for a batch)."""
+        return {route.name: route.function(signals, times) for route in self.routes}
 
     def compose(self, values: ArrayLike) -> float | np.ndarray:
         """The spec's robustness from its parts' values: `m` -> float, or `... x m` -> `...`."""
