@@ -26,7 +26,6 @@ from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour
 from stl_lfd.skill.placed import PlacedSkill, placed_scene
 from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
 
-
 # How many points' references `plan_references` keeps: twice method plan's pool of candidates.
 PLANNED_REFERENCES = 256
 
