@@ -86,7 +86,7 @@ class SkillObjective:
         planned, routes = self.planned(tracking), self.composition.route_names
 
         def score(points: np.ndarray) -> np.ndarray:
-            outcomes = planned.evaluate_all([self.space.apply(self.models, x) for x in points], self.plan_references(points))
+            outcomes = planned.execute_all(self.plan_references(points))
             return np.array([list(outcome.components.values()) + [outcome.routes[route] for route in routes] for outcome in outcomes], dtype=float)
 
         return score
@@ -118,18 +118,20 @@ class SkillObjective:
             self.backend.trial = trial
         return self.evaluate_all([models])[0]
 
-    def evaluate_all(self, models: Sequence[dict[str, HSMM]], references: list[list[Reference]] | None = None) -> list[Outcome]:
-        """`evaluate` N sets of models: their references (placement x model, retrieved together
-        unless given) executed one after the other, then scored together."""
+    def evaluate_all(self, models: Sequence[dict[str, HSMM]]) -> list[Outcome]:
+        """`evaluate` N sets of models: their references retrieved together, then executed one
+        after the other and scored together."""
+        return self.execute_all([placed.references(models) for placed in self.placed])
+
+    def execute_all(self, references: list[list[Reference]]) -> list[Outcome]:
+        """Execute and score N references at each placement (placement x N): one outcome each."""
         if self.backend is None:
             raise ExecutionError("this objective only scores signals recorded elsewhere (it has no backend)")
-        if references is None:
-            references = [placed.references(models) for placed in self.placed]
         placements = [
             self.score_all([placed.execute(self.backend, self.task.rate, reference=reference).signals for reference in placement_references])
             for placed, placement_references in zip(self.placed, references)
         ]
-        return [self._worst([outcomes[index] for outcomes in placements]) for index in range(len(models))]
+        return [self._worst([outcomes[index] for outcomes in placements]) for index in range(len(references[0]))]
 
     def _worst(self, outcomes: list[Outcome]) -> Outcome:
         """One trial's outcome from its `outcomes` at each placement: the worst robustness and
