@@ -26,8 +26,9 @@ from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour
 from stl_lfd.skill.placed import PlacedSkill, placed_scene
 from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
 
-# How many points' references `plan_references` keeps: twice method plan's pool of candidates.
-PLANNED_REFERENCES = 256
+# How much of the references it retrieved `plan_references` keeps: method plan's pool of 128
+# candidates and its refinement draws, for a task of phi1's size (about 0.3 MB a reference).
+PLANNED_REFERENCE_BYTES = 128 * 2**20
 
 
 class SkillObjective:
@@ -86,27 +87,38 @@ class SkillObjective:
         planned, routes = self.planned(tracking), self.composition.route_names
 
         def score(points: np.ndarray) -> np.ndarray:
-            outcomes = planned.execute_all(self.plan_references(points))
+            outcomes = planned.execute_all(self.plan_references(points, keep=tracking is not None))
             return np.array([list(outcome.components.values()) + [outcome.routes[route] for route in routes] for outcome in outcomes], dtype=float)
 
         return score
 
-    def plan_references(self, points: np.ndarray) -> list[list[Reference]]:
-        """The references of `b x d` points at each placement (placement x point), those not
-        among the latest PLANNED_REFERENCES retrieved together: the plan scores of successive
-        tracking models share them (a point's reference does not depend on the model)."""
+    def plan_references(self, points: np.ndarray, keep: bool = False) -> list[list[Reference]]:
+        """The references of `b x d` points at each placement (placement x point), retrieved
+        together. With `keep`, those retrieved lately are kept (up to PLANNED_REFERENCE_BYTES,
+        the oldest dropped first): the plan scores of successive tracking models share them (a
+        point's reference does not depend on the model)."""
         keys = [np.asarray(point, dtype=float).tobytes() for point in points]
-        new = list(dict.fromkeys(key for key in keys if key not in self._references))
+        known = self._references if keep else {}
+        new = list(dict.fromkeys(key for key in keys if key not in known))
+        retrieved: dict[bytes, list[Reference]] = {}
         if new:
-            models = [self.space.apply(self.models, np.frombuffer(key)) for key in new]
-            retrieved = [placed.references(models) for placed in self.placed]
-            for index, key in enumerate(new):
-                self._references[key] = [references[index] for references in retrieved]
+            placements = [placed.references([self.space.apply(self.models, np.frombuffer(key)) for key in new]) for placed in self.placed]
+            retrieved = {key: [references[index] for references in placements] for index, key in enumerate(new)}
+        result = [[(retrieved.get(key) or known[key])[placement] for key in keys] for placement in range(len(self.placed))]
+        if keep:
+            self._keep(keys, retrieved)
+        return result
+
+    def _keep(self, keys: list[bytes], retrieved: dict[bytes, list[Reference]]) -> None:
+        """Keep the `retrieved` references and mark `keys` as the latest used."""
+        self._references.update(retrieved)
         for key in keys:
             self._references.move_to_end(key)
-        while len(self._references) > PLANNED_REFERENCES:
-            self._references.popitem(last=False)
-        return [[self._references[key][placement] for key in keys] for placement in range(len(self.placed))]
+        sizes = {key: sum(reference_bytes(reference) for reference in references) for key, references in self._references.items()}
+        total = sum(sizes.values())
+        while total > PLANNED_REFERENCE_BYTES and self._references:
+            key, _ = self._references.popitem(last=False)
+            total -= sizes[key]
 
     def reference(self, models: dict[str, HSMM]) -> Reference:
         """What executing `models` means at the first placement (see `PlacedSkill.reference`)."""
@@ -170,6 +182,11 @@ class SkillObjective:
                     {name: float(value[row]) for name, value in routes.items()} or None,
                 )
         return outcomes
+
+
+def reference_bytes(reference: Reference) -> int:
+    """The memory a reference's arrays take."""
+    return sum(value.nbytes for value in vars(reference).values() if isinstance(value, np.ndarray))
 
 
 def task_models(task: Task) -> dict[str, HSMM]:

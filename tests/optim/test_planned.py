@@ -163,3 +163,24 @@ def test_plans_scored_together_are_the_plans_scored_alone_and_the_kinematic_tria
     for x, values in zip(points, plans):
         assert np.array_equal(objective.plan_score()(x[None])[0], values)
         assert np.array_equal(list(objective(x).components.values()), values)
+
+
+def test_kept_references_are_those_retrieved_anew_and_the_oldest_go_beyond_the_budget(tmp_path, learned_model_file, monkeypatch):
+    """Plans through successive tracking models share the references of recent points: kept,
+    they are exactly what a new retrieval gives; past the memory budget the oldest are dropped
+    (and retrieved again when asked for)."""
+    import stl_lfd.optim.objective as objectives
+
+    task = load_task(small_task(tmp_path, learned_model_file))
+    space, objective = objectives.objective_for(task, objectives.task_models(task))
+    points = space.lower + np.random.default_rng(1).random((4, space.dimension)) * (space.upper - space.lower)
+    kept = objective.plan_references(points, keep=True)[0]
+    fresh = objective.plan_references(points)[0]
+    for a, b in zip(kept, fresh):
+        assert a is not b and np.array_equal(a.times, b.times) and np.array_equal(a.positions, b.positions)
+    assert all(a is b for a, b in zip(objective.plan_references(points[::-1], keep=True)[0], kept[::-1]))
+    monkeypatch.setattr(objectives, "PLANNED_REFERENCE_BYTES", 2.5 * objectives.reference_bytes(kept[0]))
+    again = objective.plan_references(points[:1], keep=True)[0][0]  # the latest used: kept
+    assert again is kept[0] and len(objective._references) == 2  # the oldest, points 3 and 2, dropped
+    assert objective.plan_references(points[1:2], keep=True)[0][0] is kept[1]
+    assert objective.plan_references(points[3:], keep=True)[0][0] is not kept[3]  # retrieved anew
