@@ -36,15 +36,20 @@ def new_conjunction(values: np.ndarray, nu: float) -> np.ndarray:
     finite_minimum = np.isfinite(minimum)
     safe_minimum = np.where(finite_minimum & (minimum != 0), minimum, 1.0)
     finite = np.isfinite(values)
-    safe_values = np.where(finite, values, 0.0)
+    all_finite = bool(finite.all())
+    safe_values = values if all_finite else np.where(finite, values, 0.0)
     with np.errstate(over="ignore", invalid="ignore"):
-        relative = (safe_values - safe_minimum) / safe_minimum  # ... x m
-        # Negative branch: relative <= 0 for every finite operand, +inf operands drop out.
-        negative_weights = np.where(finite, np.exp(nu * relative), 0.0)
-        negative = safe_minimum[..., 0] * np.sum(negative_weights * np.exp(relative), axis=-1) / np.sum(negative_weights, axis=-1)
-        # Positive branch: relative >= 0.
-        positive_weights = np.where(finite, np.exp(-nu * relative), 0.0)
-        positive = np.sum(safe_values * positive_weights, axis=-1) / np.sum(positive_weights, axis=-1)
+        # relative <= 0 for every finite operand where rho_min < 0, >= 0 where rho_min > 0: either
+        # way exp(-nu |relative|) is the branch's weight (bit for bit), +inf operands drop out.
+        distance = np.abs((safe_values - safe_minimum) / safe_minimum)  # ... x m
+        ratios = None if nu == 1 else np.exp(-distance)  # exp(relative) of the negative branch
+        weights = np.exp(np.multiply(-nu, distance, out=distance))
+        if not all_finite:
+            weights[~finite] = 0.0
+        ratios = weights if ratios is None else ratios
+        totals = np.sum(weights, axis=-1)
+        negative = safe_minimum[..., 0] * np.sum(weights * ratios, axis=-1) / totals
+        positive = np.sum(safe_values * weights, axis=-1) / totals
     minimum = minimum[..., 0]
     result = np.where(minimum > 0, positive, np.where(minimum < 0, negative, 0.0))
     return np.where(np.isfinite(minimum), result, minimum)
