@@ -9,8 +9,8 @@ both sides alike. The runs are the bundled phi1, phi2 and phi3_strict tasks on P
 suite's `until_l4` (an unbounded until under the new semantics, whose plans are expensive to
 score) on the kinematic backend, each with its own budget and seed 0. On PyBullet, method
 `plan` checks after every trial whether the robot follows its plans (within 1 mm, it scores
-the plans themselves; otherwise through the robot's tracking model, planning every proposal's
-candidates anew); each PyBullet run is also made `untracked` (the plan as it stands,
+the plans themselves; otherwise through the robot's tracking model, predicting every
+proposal's candidates anew); each PyBullet run is also made `untracked` (the plan as it stands,
 `benchmarks.bench_suite.untracked`, never checked), whose plans are memoised for the run.
 """
 
