@@ -184,3 +184,20 @@ def test_kept_references_are_those_retrieved_anew_and_the_oldest_go_beyond_the_b
     assert again is kept[0] and len(objective._references) == 2  # the oldest, points 3 and 2, dropped
     assert objective.plan_references(points[1:2], keep=True)[0][0] is kept[1]
     assert objective.plan_references(points[3:], keep=True)[0][0] is not kept[3]  # retrieved anew
+
+
+def test_recordings_on_other_clocks_are_scored_apart_and_as_alone(tmp_path, learned_model_file):
+    """`score_all` batches the recordings that share sample times; each outcome is exactly the
+    recording's own `score`."""
+    from stl_lfd.optim.objective import objective_for, task_models
+    from stl_lfd.signals import SignalTable
+
+    task = load_task(small_task(tmp_path, learned_model_file))
+    space, objective = objective_for(task, task_models(task))
+    points = space.lower + np.random.default_rng(2).random((3, space.dimension)) * (space.upper - space.lower)
+    recordings = [outcome.payload for outcome in objective.planned().evaluate_all([space.apply(objective.models, x) for x in points])]
+    shorter = SignalTable(recordings[1].times[:-50], {name: values[:-50] for name, values in recordings[1].columns.items()}, source="shorter")
+    mixed = [recordings[0], shorter, recordings[2]]
+    for together, signals in zip(objective.score_all(mixed), mixed):
+        alone = objective.score_all([signals])[0]
+        assert together.robustness == alone.robustness and together.components == alone.components and together.payload is signals
