@@ -6,6 +6,7 @@ operands stand for empty windows: +inf is the identity of a conjunction, -inf of
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -467,7 +468,25 @@ def _factored_terms(values: np.ndarray, scales: np.ndarray, nu: float, out: np.n
 
 def _tail_sums(left: np.ndarray, rows: np.ndarray, start: int, ends: np.ndarray, scales: np.ndarray, nu: float) -> np.ndarray:
     """`2 x owners` sums of the terms of left[row, start .. end-1] under each owner's scale
-    (0 where end <= start).
+    (0 where end <= start). Every sample summed is above its owner's scale.
+
+    Owners that sum many samples take them by interpolation where it is exact to rounding
+    (`_interpolated_tail_sums`), the others term by term.
+    """
+    lengths = ends - start
+    long = np.flatnonzero(lengths >= 4 * _NODE_COUNTS[0])
+    # interpolation costs at least the fewest points times the longest sum
+    if long.size == 0 or lengths[long].sum() < _NODE_COUNTS[0] * _INTERPOLATION_COST * lengths.max():
+        return _direct_tail_sums(left, rows, start, ends, scales, nu)
+    sums = np.empty((2, ends.size))
+    sums[:, long], taken = _interpolated_tail_sums(left, rows[long], start, ends[long], scales[long], nu)
+    rest = np.setdiff1d(np.arange(ends.size), long[taken], assume_unique=True)
+    sums[:, rest] = _direct_tail_sums(left, rows[rest], start, ends[rest], scales[rest], nu)
+    return sums
+
+
+def _direct_tail_sums(left: np.ndarray, rows: np.ndarray, start: int, ends: np.ndarray, scales: np.ndarray, nu: float) -> np.ndarray:
+    """`_tail_sums` term by term.
 
     Owners are taken by sign and by end, in blocks of owners x samples: the samples before the
     block's first end belong to every owner of the block.
@@ -509,6 +528,179 @@ def _tail_block(left: np.ndarray, rows: np.ndarray, start: int, ends: np.ndarray
     finite = np.where(np.isfinite(values), values, 0.0)  # -nu x = -nu v / m + nu
     numerators = weights @ finite if one_row else np.einsum("ij,ij->i", weights, finite)
     return np.stack([totals, numerators]) * np.exp(nu)
+
+
+# --- Long sums by interpolation ---------------------------------------------------------------
+#
+# The tail sums of one row's owners all sum the same samples v_k, each owner m its own function
+# f(v) = exp(-a (v - m)) (a = nu / |m| for weights, (1 + nu) / |m| for the numerators of a
+# negative m; v exp(-a (v - m)) for those of a positive one). Interpolated at R Chebyshev
+# points t_r of the row's range [lo, hi], f(v) = sum_r f(t_r) l_r(v) with the Lagrange basis
+# l_r, so that sum_{k < e} f(v_k) = sum_r f(t_r) L_r(e) with L_r(e) = sum_{k < e} l_r(v_k):
+# running sums of the basis, once per row, and R terms per owner instead of e. At Chebyshev
+# points the error is at most 2 ((hi - lo) / 4)^R max |f^(R)| / R! per sample, where
+# max |f^(R)| = a^R exp(a (m - lo)) (times (R / a + max |v|) for v exp(..)): an owner takes the
+# interpolation when its samples' errors add up to at most _INTERPOLATION_ERROR, next to its
+# own term 1 (and for a positive numerator, next to max |v|); the others sum term by term.
+# Numbers of points R an owner may take (the fewest that are exact enough), and its row with it.
+_NODE_COUNTS = (12, 16, 20, 24, 32, 40, 48)
+_INTERPOLATION_ERROR = 1e-14
+_LOG_FACTORIALS = np.array([math.lgamma(count + 1) for count in _NODE_COUNTS])
+# Largest log f(t_r) an owner's node values may reach: the interpolation's rounding grows with
+# them (f is at most 1 on the owner's own samples, larger below its scale).
+_NODE_VALUE_LOG_MAX = 2.0
+# Cost of one node at one sample or one owner, in terms summed one by one (measured).
+_INTERPOLATION_COST = 4
+# Running sums are taken within blocks of this many samples, then across blocks (rounding
+# grows with the blocks' length, not the row's).
+_RUNNING_BLOCK = 64
+# Fewest rows x nodes for which running sums go a sample at a time.
+_ROW_LOOP_MIN = 512
+
+
+def _interpolated_tail_sums(left: np.ndarray, rows: np.ndarray, start: int, ends: np.ndarray, scales: np.ndarray, nu: float) -> tuple[np.ndarray, np.ndarray]:
+    """`_tail_sums` by interpolation where it is within `_INTERPOLATION_ERROR`: the sums
+    (`2 x owners`, garbage where not taken) and the mask of the owners taken."""
+    used_rows, row_index = np.unique(rows, return_inverse=True)
+    stops = np.full(used_rows.size, start)
+    np.maximum.at(stops, row_index, ends)
+    values = np.array(left[used_rows, start : int(stops.max())])
+    values[np.arange(values.shape[-1]) >= (stops - start)[:, None]] = np.inf  # no owner sums these
+    finite = np.isfinite(values)
+    lows = np.where(finite, values, np.inf).min(axis=-1)
+    highs = np.where(finite, values, -np.inf).max(axis=-1)
+    lows, highs = np.where(finite.any(axis=-1), lows, 0.0), np.where(finite.any(axis=-1), highs, 0.0)
+    needed = _nodes_needed(lows[row_index], highs[row_index], ends - start, scales, nu)  # 0: none will do
+    row_nodes = _row_nodes(row_index, needed, ends - start, stops - start)
+    needed[(needed == 0) | (needed > row_nodes[row_index])] = 0
+    sums = np.zeros((2, ends.size))
+    for count in np.unique(row_nodes[row_nodes > 0]):
+        group = np.flatnonzero(row_nodes == count)
+        nodes = _chebyshev_nodes(lows[group], highs[group], count)  # rows x R
+        local = np.full(used_rows.size, -1)
+        local[group] = np.arange(group.size)
+        step = max(1, _CHUNK_ELEMENTS // (count * values.shape[-1]))
+        for begin in range(0, group.size, step):
+            owners = np.flatnonzero((needed > 0) & (local[row_index] >= begin) & (local[row_index] < begin + step))
+            running = _running_basis_sums(values[group[begin : begin + step]], nodes[begin : begin + step])  # (samples + 1) x rows x R
+            counts = running[ends[owners] - start, local[row_index[owners]] - begin]  # owners x R
+            sums[:, owners] = _node_sums(nodes[local[row_index[owners]]], counts, scales[owners], nu)
+    return sums, needed > 0
+
+
+def _row_nodes(row_index: np.ndarray, needed: np.ndarray, lengths: np.ndarray, spans: np.ndarray) -> np.ndarray:
+    """Number of points of each row (0: none), the cheapest by `_INTERPOLATION_COST`: each
+    point costs the row's span and its owners' count, owners that need more sum their terms
+    one by one.
+
+    Args:
+        row_index: `owners` rows; needed: `owners` points each needs (0: none will do);
+        lengths: `owners` terms each sums; spans: `rows` samples each row's sums run over.
+    """
+    counts = np.array(_NODE_COUNTS)
+    rows, kinds = spans.size, counts.size + 1
+    kind = np.where(needed > 0, np.searchsorted(counts, needed), counts.size)  # counts.size: none
+    cell = row_index * kinds + kind
+    owners = np.cumsum(np.bincount(cell, minlength=rows * kinds).reshape(rows, kinds), axis=1)[:, :-1]
+    covered = np.cumsum(np.bincount(cell, lengths, minlength=rows * kinds).reshape(rows, kinds), axis=1)
+    totals = covered[:, -1:]
+    costs = np.hstack([totals, counts * (spans[:, None] + owners) * _INTERPOLATION_COST + totals - covered[:, :-1]])
+    return np.concatenate([[0], counts])[np.argmin(costs, axis=1)]
+
+
+def _chebyshev_nodes(lows: np.ndarray, highs: np.ndarray, count: int) -> np.ndarray:
+    """`rows x count` Chebyshev points (first kind) of each row's [low, high]."""
+    angles = (2 * np.arange(count) + 1) * np.pi / (2 * count)
+    return (lows + highs)[:, None] / 2 + (highs - lows)[:, None] / 2 * np.cos(angles)
+
+
+def _nodes_needed(lows: np.ndarray, highs: np.ndarray, counts: np.ndarray, scales: np.ndarray, nu: float) -> np.ndarray:
+    """The fewest of `_NODE_COUNTS` points at which interpolating each owner's terms over [low,
+    high] errs by at most `_INTERPOLATION_ERROR` over its `counts` samples (bound above, in
+    logarithms); 0 where none does or the node values would be too large."""
+    magnitudes = np.abs(scales)
+    negative = scales < 0
+    rates = np.where(negative, 1 + nu, nu) / magnitudes  # the larger of the owner's two rates
+    points = np.array(_NODE_COUNTS)
+    with np.errstate(all="ignore"):
+        below = rates * (scales - lows)
+        constant = np.log(2 * np.maximum(counts, 1)) + below
+        bound = constant[:, None] + points * np.log(rates * (highs - lows) / 4)[:, None] - _LOG_FACTORIALS
+        peak = np.maximum(np.maximum(np.abs(lows), np.abs(highs)), magnitudes)
+        bound += np.where(negative[:, None], 0.0, np.log1p(points / (rates * peak)[:, None]))
+        fits = (bound <= math.log(_INTERPOLATION_ERROR)) & ((below <= _NODE_VALUE_LOG_MAX) & (highs > lows))[:, None]
+    needed = np.where(fits.any(axis=1) & (nu <= _FACTORED_NU_MAX), points[np.argmax(fits, axis=1)], 0)
+    np.copyto(needed, _NODE_COUNTS[0], where=(highs == lows) & (nu <= _FACTORED_NU_MAX))  # one value: exact
+    return needed
+
+
+def _running_basis_sums(values: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """L_r(e) = sum_{k < e} l_r(values[k]) for the Lagrange basis at `nodes` (Chebyshev,
+    barycentric weights (-1)^r sin((2r+1) pi / 2R)); +inf samples count 0.
+
+    Args:
+        values: `rows x samples`.
+        nodes: `rows x R`.
+
+    Returns:
+        `(samples + 1) x rows x R` array, L_r(0) = 0.
+    """
+    rows, samples = values.shape
+    count = nodes.shape[-1]
+    weights = (-1.0) ** np.arange(count) * np.sin((2 * np.arange(count) + 1) * np.pi / (2 * count))
+    finite = np.isfinite(values).T  # samples x rows
+    all_finite = bool(finite.all())
+    blocks = -(-samples // _RUNNING_BLOCK)
+    running = np.zeros((blocks * _RUNNING_BLOCK + 1, rows, count))
+    basis = running[1 : samples + 1]
+    between = (nodes[:, 0] + nodes[:, 1]) / 2  # inside the range, on no node: stands for +inf
+    np.subtract((values.T if all_finite else np.where(finite, values.T, between))[:, :, None], nodes, out=basis)
+    np.divide(weights, basis, out=basis)
+    totals = basis.sum(axis=-1)  # samples x rows
+    on_node = ~np.isfinite(totals)  # a sample on a node (to the last bit): its basis is one-hot
+    if on_node.any():
+        sample, row = np.nonzero(on_node)
+        hits = values[row, sample][:, None] == nodes[row]
+        basis[sample, row] = hits / hits.sum(axis=-1, keepdims=True)
+        totals[on_node] = 1.0
+    basis *= (1 / totals if all_finite else finite / totals)[:, :, None]
+    # running sums within blocks, then the blocks' totals carried over; a sample at a time when
+    # there are many rows (faster than cumsum along an axis, slower for a few rows)
+    shaped = running[1:].reshape(blocks, _RUNNING_BLOCK, rows, count)
+    if rows * count < _ROW_LOOP_MIN:
+        np.cumsum(shaped, axis=1, out=shaped)
+    else:
+        for block in shaped:
+            for sample in range(1, _RUNNING_BLOCK):
+                block[sample] += block[sample - 1]
+    shaped[1:] += np.cumsum(shaped[:-1, -1], axis=0)[:, None]
+    return running[: samples + 1]
+
+
+def _node_sums(nodes: np.ndarray, counts: np.ndarray, scales: np.ndarray, nu: float) -> np.ndarray:
+    """Weights and numerators (`2 x owners`) from each owner's terms at its row's nodes
+    (`owners x R`) and the running basis sums there (`counts`, `owners x R`).
+
+    exp(-a (t - m)) is taken as exp(-a t) times exp(a m) = e^(+-nu): the nodes are at most
+    _NODE_VALUE_LOG_MAX below m, so neither factor leaves the floating-point range.
+    """
+    negative = scales < 0
+    rates = nu / np.abs(scales)
+    weights = np.multiply(nodes, -rates[:, None])
+    np.exp(weights, out=weights)
+    sums = np.empty((2, scales.size))
+    sums[0] = np.einsum("or,or->o", weights, counts)
+    if negative.any():
+        if nu == 1:
+            sums[1] = np.einsum("or,or,or->o", weights, weights, counts)
+        else:
+            sums[1] = np.einsum("or,or->o", np.exp(nodes * -((1 + nu) / np.abs(scales))[:, None]), counts)
+    if not negative.all():
+        sums[1] = np.where(negative, sums[1], np.einsum("or,or,or->o", nodes, weights, counts))
+    factors = np.exp(np.where(negative, -nu, nu))
+    sums[0] *= factors
+    sums[1] *= np.where(negative, np.exp(-(1 + nu)), factors)
+    return sums
 
 
 def _blocks(sizes: np.ndarray, budget: int) -> list[slice]:

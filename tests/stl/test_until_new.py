@@ -207,3 +207,80 @@ def test_a_long_trace_matches_the_reference():
         for lo, width, count in ((0, 2200, 1), (100, 400, 1), (0, 300, 40)):
             expected = reference_until(left, right, lo, width, count, 1.0)
             assert difference(until_windows(left, right, lo, width, count, new_conjunction, 1.0), expected) <= TOLERANCE
+
+
+# --- Long sums by interpolation -------------------------------------------------------------
+
+
+def owned_sums_case(rng: np.random.Generator, nu: float) -> tuple[np.ndarray, np.ndarray, int, np.ndarray, np.ndarray]:
+    """Rows of 200-900 samples (smooth, rough, flat or with +inf) and owners (row, end) whose
+    scale is below every sample they sum, at gaps from 1e-4 to 10 of their prefix minimum."""
+    rows, samples = int(rng.integers(1, 5)), int(rng.integers(200, 900))
+    kind = rng.integers(4)
+    if kind == 0:
+        left = np.cumsum(rng.normal(0, 0.01, (rows, samples)), axis=-1) + rng.normal(0, 0.2)
+    elif kind == 1:
+        left = rng.normal(0, 1, (rows, samples))
+    elif kind == 2:
+        left = np.repeat(rng.normal(0, 0.1, (rows, samples // 8 + 1)), 8, axis=-1)[:, :samples]
+    else:
+        left = np.abs(np.cumsum(rng.normal(0, 0.02, (rows, samples)), axis=-1)) + 0.01
+        left[rng.random((rows, samples)) < 0.05] = np.inf
+    start = int(rng.integers(0, 5))
+    owner_rows = rng.integers(0, rows, 300)
+    ends = rng.integers(start, samples + 1, 300)
+    prefix = np.array([left[row, start:end].min(initial=np.inf) for row, end in zip(owner_rows, ends)])
+    prefix = np.where(np.isfinite(prefix), prefix, 1.0)
+    scales = prefix - np.abs(rng.normal(0, 0.05, 300)) * rng.choice([1e-4, 1e-2, 1.0, 10.0], 300) - 1e-12
+    scales[scales == 0] = -1e-3
+    return left, owner_rows, start, ends, scales
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_interpolated_sums_match_term_by_term(seed, monkeypatch):
+    """Wherever the bound lets an owner take the interpolation (made free, so that it is taken
+    wherever exact), its sums equal the direct ones next to its own term 1."""
+    monkeypatch.setattr(_numerics, "_INTERPOLATION_COST", 0)
+    rng = np.random.default_rng(seed)
+    taken = 0
+    for _ in range(40):
+        nu = float(rng.choice(NUS + (30.0,)))
+        left, rows, start, ends, scales = owned_sums_case(rng, nu)
+        with np.errstate(all="ignore"):
+            actual = _numerics._tail_sums(left, rows, start, ends, scales, nu)
+            expected = _numerics._direct_tail_sums(left, rows, start, ends, scales, nu)
+            taken += int(_numerics._interpolated_tail_sums(left, rows, start, ends, scales, nu)[1].sum())
+        scale = 1 + np.abs(expected)
+        assert np.max(np.abs(actual - expected) / scale) <= 1e-12
+    assert taken > 2000  # of 12,000 owners: the interpolation was exercised
+
+
+def test_interpolation_is_taken_only_where_it_pays():
+    """One owner summing a long row sums term by term; 400 owners of one row interpolate."""
+    rng = np.random.default_rng(1)
+    left = np.cumsum(rng.normal(0, 0.002, (1, 1000)), axis=-1) + 1.0
+    ends = np.arange(600, 1000)
+    scales = np.minimum.accumulate(left[0])[ends - 1] - 0.5
+    rows = np.zeros(ends.size, dtype=int)
+    assert _numerics._interpolated_tail_sums(left, rows, 0, ends, scales, 1.0)[1].all()
+    assert not _numerics._interpolated_tail_sums(left, rows[:1], 0, ends[:1], scales[:1], 1.0)[1].any()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_long_top_level_untils_match_the_reference(seed, monkeypatch):
+    """Untils over 400-700 samples at their first outputs, on smooth traces that cross zero,
+    batched: the candidates whose right operand owns them sum long prefixes by interpolation."""
+    rng = np.random.default_rng(100 + seed)
+    for free in (False, True):
+        if free:
+            monkeypatch.setattr(_numerics, "_INTERPOLATION_COST", 0)
+        for _ in range(3):
+            samples = int(rng.integers(400, 700))
+            left = np.cumsum(rng.normal(0, 0.01, (3, samples)), axis=-1) + rng.normal(0.2, 0.1)
+            right = np.cumsum(rng.normal(0, 0.01, (3, samples)), axis=-1) + rng.normal(-0.2, 0.1)
+            nu = float(rng.choice(NUS))
+            count = int(rng.integers(1, 4))
+            with np.errstate(all="ignore"):
+                expected = reference_until(left, right, 0, samples, count, nu)
+            actual = until_windows(left, right, 0, samples, count, new_conjunction, nu)
+            assert difference(actual, expected) <= TOLERANCE
