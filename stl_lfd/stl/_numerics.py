@@ -112,6 +112,8 @@ def window_reduce(values: np.ndarray, width: int, count: int, reduce, nu: float)
     Returns:
         `... x count` array.
     """
+    if reduce is new_conjunction and width >= _INTERPOLATED_WIDTH_MIN and count > 1:
+        return _interpolated_windows(values, width, count, nu)
     values = _pad(values, count + width - 1, np.inf)
     windows = sliding_window_view(values, width, axis=-1)  # ... x (n - width + 1) x width
     batch = int(np.prod(values.shape[:-1], dtype=int))
@@ -541,7 +543,11 @@ def _tail_block(left: np.ndarray, rows: np.ndarray, start: int, ends: np.ndarray
 # points the error is at most 2 ((hi - lo) / 4)^R max |f^(R)| / R! per sample, where
 # max |f^(R)| = a^R exp(a (m - lo)) (times (R / a + max |v|) for v exp(..)): an owner takes the
 # interpolation when its samples' errors add up to at most _INTERPOLATION_ERROR, next to its
-# own term 1 (and for a positive numerator, next to max |v|); the others sum term by term.
+# own term 1 (and for a positive numerator, next to max |v|), and when f stays within e^2 at
+# the nodes (rounding); the others sum term by term. A row takes it only where it costs less.
+# Bounded windows under the new robustness (`_interpolated_windows`) do the same with the
+# windows' minima as owners: a window's sums are differences of two running sums.
+#
 # Numbers of points R an owner may take (the fewest that are exact enough), and its row with it.
 _NODE_COUNTS = (12, 16, 20, 24, 32, 40, 48)
 _INTERPOLATION_ERROR = 1e-14
@@ -571,7 +577,7 @@ def _interpolated_tail_sums(left: np.ndarray, rows: np.ndarray, start: int, ends
     highs = np.where(finite, values, -np.inf).max(axis=-1)
     lows, highs = np.where(finite.any(axis=-1), lows, 0.0), np.where(finite.any(axis=-1), highs, 0.0)
     needed = _nodes_needed(lows[row_index], highs[row_index], ends - start, scales, nu)  # 0: none will do
-    row_nodes = _row_nodes(row_index, needed, ends - start, stops - start)
+    row_nodes = _row_nodes(row_index, needed, ends - start, stops - start, _INTERPOLATION_COST)
     needed[(needed == 0) | (needed > row_nodes[row_index])] = 0
     sums = np.zeros((2, ends.size))
     for count in np.unique(row_nodes[row_nodes > 0]):
@@ -588,10 +594,9 @@ def _interpolated_tail_sums(left: np.ndarray, rows: np.ndarray, start: int, ends
     return sums, needed > 0
 
 
-def _row_nodes(row_index: np.ndarray, needed: np.ndarray, lengths: np.ndarray, spans: np.ndarray) -> np.ndarray:
-    """Number of points of each row (0: none), the cheapest by `_INTERPOLATION_COST`: each
-    point costs the row's span and its owners' count, owners that need more sum their terms
-    one by one.
+def _row_nodes(row_index: np.ndarray, needed: np.ndarray, lengths: np.ndarray, spans: np.ndarray, cost: float) -> np.ndarray:
+    """Number of points of each row (0: none), the cheapest: each point costs `cost` times the
+    row's span and its owners' count, owners that need more sum their terms one by one.
 
     Args:
         row_index: `owners` rows; needed: `owners` points each needs (0: none will do);
@@ -604,7 +609,7 @@ def _row_nodes(row_index: np.ndarray, needed: np.ndarray, lengths: np.ndarray, s
     owners = np.cumsum(np.bincount(cell, minlength=rows * kinds).reshape(rows, kinds), axis=1)[:, :-1]
     covered = np.cumsum(np.bincount(cell, lengths, minlength=rows * kinds).reshape(rows, kinds), axis=1)
     totals = covered[:, -1:]
-    costs = np.hstack([totals, counts * (spans[:, None] + owners) * _INTERPOLATION_COST + totals - covered[:, :-1]])
+    costs = np.hstack([totals, counts * (spans[:, None] + owners) * cost + totals - covered[:, :-1]])
     return np.concatenate([[0], counts])[np.argmin(costs, axis=1)]
 
 
@@ -655,13 +660,14 @@ def _running_basis_sums(values: np.ndarray, nodes: np.ndarray) -> np.ndarray:
     basis = running[1 : samples + 1]
     between = (nodes[:, 0] + nodes[:, 1]) / 2  # inside the range, on no node: stands for +inf
     np.subtract((values.T if all_finite else np.where(finite, values.T, between))[:, :, None], nodes, out=basis)
-    np.divide(weights, basis, out=basis)
-    totals = basis.sum(axis=-1)  # samples x rows
-    on_node = ~np.isfinite(totals)  # a sample on a node (to the last bit): its basis is one-hot
+    with np.errstate(divide="ignore", invalid="ignore"):
+        np.divide(weights, basis, out=basis)
+        totals = basis.sum(axis=-1)  # samples x rows
+    on_node = ~np.isfinite(totals)  # a sample on a node (to rounding): its basis is one-hot there
     if on_node.any():
         sample, row = np.nonzero(on_node)
-        hits = values[row, sample][:, None] == nodes[row]
-        basis[sample, row] = hits / hits.sum(axis=-1, keepdims=True)
+        nearest = np.argmin(np.abs(np.where(finite[sample, row], values[row, sample], between[row])[:, None] - nodes[row]), axis=-1)
+        basis[sample, row] = np.arange(count) == nearest[:, None]
         totals[on_node] = 1.0
     basis *= (1 / totals if all_finite else finite / totals)[:, :, None]
     # running sums within blocks, then the blocks' totals carried over; a sample at a time when
@@ -701,6 +707,64 @@ def _node_sums(nodes: np.ndarray, counts: np.ndarray, scales: np.ndarray, nu: fl
     sums[0] *= factors
     sums[1] *= np.where(negative, np.exp(-(1 + nu)), factors)
     return sums
+
+
+# Windows at least this wide take the interpolation where it is exact (see above): outputs are
+# taken in groups of `width`, whose windows span 2 x width - 1 samples, a group's owners (the
+# windows' minima) sharing the running sums of the basis over that span.
+_INTERPOLATED_WIDTH_MIN = 64
+# Cost of one node at one sample or one owner, in window operands (measured; a window's new
+# conjunction costs more an operand than a tail sum a term).
+_WINDOW_INTERPOLATION_COST = 1
+
+
+def _interpolated_windows(values: np.ndarray, width: int, count: int, nu: float) -> np.ndarray:
+    """`window_reduce(values, width, count, new_conjunction, nu)`: each window's weights and
+    numerators, under its minimum, by interpolation over its group's span where that is exact,
+    term by term elsewhere."""
+    shape = values.shape[:-1]
+    span = 2 * width - 1
+    groups = -(-count // width)
+    padded = _pad(values, groups * width + width - 1, np.inf)[..., : groups * width + width - 1].reshape(-1, groups * width + width - 1)
+    rows = padded.shape[0]
+    minima = window_min(padded, width, count)  # rows x count
+    result = minima.copy()  # -inf, +inf and 0 are their own values
+    row, output = np.nonzero(np.isfinite(minima) & (minima != 0))
+    finite = np.isfinite(padded)
+    lows = window_min(np.where(finite, padded, np.inf), span, groups * width)[:, ::width]  # rows x groups
+    highs = -window_min(np.where(finite, -padded, np.inf), span, groups * width)[:, ::width]
+    cell = row * groups + output // width
+    empty = ~np.isfinite(lows.reshape(-1))
+    cell_lows, cell_highs = np.where(empty, 0.0, lows.reshape(-1)), np.where(empty, 0.0, highs.reshape(-1))
+    scales = minima[row, output]
+    needed = _nodes_needed(cell_lows[cell], cell_highs[cell], np.full(row.size, width), scales, nu)
+    cell_nodes = _row_nodes(cell, needed, np.full(row.size, width), np.full(rows * groups, span), _WINDOW_INTERPOLATION_COST)
+    needed[(needed == 0) | (needed > cell_nodes[cell])] = 0
+    sums = np.zeros((2, row.size))
+    spans = sliding_window_view(padded, span, axis=-1)
+    for points in np.unique(cell_nodes[cell_nodes > 0]):
+        cells = np.flatnonzero(cell_nodes == points)
+        nodes = _chebyshev_nodes(cell_lows[cells], cell_highs[cells], points)
+        local = np.full(rows * groups, -1)
+        local[cells] = np.arange(cells.size)
+        step = max(1, _CHUNK_ELEMENTS // (points * span))
+        for begin in range(0, cells.size, step):
+            part = cells[begin : begin + step]
+            owners = np.flatnonzero((needed > 0) & (local[cell] >= begin) & (local[cell] < begin + step))
+            running = _running_basis_sums(spans[part // groups, (part % groups) * width], nodes[begin : begin + step])
+            offsets, columns = output[owners] % width, local[cell[owners]] - begin
+            counts = running[offsets + width, columns] - running[offsets, columns]  # owners x R
+            sums[:, owners] = _node_sums(nodes[local[cell[owners]]], counts, scales[owners], nu)
+    taken = needed > 0
+    values_taken = np.where(scales[taken] < 0, scales[taken] * sums[1, taken], sums[1, taken]) / sums[0, taken]
+    result[row[taken], output[taken]] = values_taken
+    rest = np.flatnonzero(~taken)
+    windows = sliding_window_view(padded, width, axis=-1)
+    step = max(1, _CHUNK_ELEMENTS // width)
+    for begin in range(0, rest.size, step):
+        part = rest[begin : begin + step]
+        result[row[part], output[part]] = new_conjunction(windows[row[part], output[part]], nu)
+    return result.reshape(shape + (count,))
 
 
 def _blocks(sizes: np.ndarray, budget: int) -> list[slice]:
