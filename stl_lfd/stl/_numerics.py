@@ -56,6 +56,42 @@ def new_conjunction(values: np.ndarray, nu: float) -> np.ndarray:
     return np.where(np.isfinite(minimum), result, minimum)
 
 
+def new_conjunction_of(operands: list[np.ndarray], nu: float) -> np.ndarray:
+    """`new_conjunction` of a few arrays of one shape, operand by operand: the same values (to
+    rounding), without stacking them (a short last axis reduces slowly).
+
+    Args:
+        operands: arrays of one shape `...`.
+        nu: sharpness, > 0.
+
+    Returns:
+        `...` array.
+    """
+    minimum = operands[0]
+    for operand in operands[1:]:
+        minimum = np.minimum(minimum, operand)
+    usable = np.isfinite(minimum) & (minimum != 0)
+    safe_minimum = np.where(usable, minimum, 1.0)
+    magnitude = np.abs(safe_minimum)
+    negative = minimum < 0
+    any_negative, any_positive = bool(negative.any()), bool((minimum > 0).any())
+    totals, below, above = np.zeros(minimum.shape), np.zeros(minimum.shape), np.zeros(minimum.shape)
+    distance, weights = np.empty(minimum.shape), np.empty(minimum.shape)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for operand in operands:
+            np.subtract(operand, safe_minimum, out=distance)
+            distance /= magnitude  # >= 0 where the minimum is usable; +inf operands drop out
+            np.multiply(distance, -nu, out=weights)
+            np.exp(weights, out=weights)
+            totals += weights
+            if any_negative:  # the negative branch's exp(relative) = exp(-distance) times the weight
+                below += weights * (weights if nu == 1 else np.exp(-distance))
+            if any_positive:
+                above += weights * (operand if np.isfinite(operand).all() else np.where(np.isfinite(operand), operand, 0.0))
+        result = np.where(negative, safe_minimum * below, above) / totals
+    return np.where(usable, result, np.where(np.isfinite(minimum), 0.0, minimum))
+
+
 def new_disjunction(values: np.ndarray, nu: float) -> np.ndarray:
     """`!(!a & !b & ...)` along the last axis."""
     return -new_conjunction(-np.asarray(values, dtype=float), nu)

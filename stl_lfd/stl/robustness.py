@@ -33,6 +33,7 @@ from stl_lfd.stl import ast
 from stl_lfd.stl._numerics import (
     classic_conjunction,
     new_conjunction,
+    new_conjunction_of,
     until_windows,
     window_min,
     window_reduce,
@@ -440,7 +441,7 @@ def _not(node: ast.Not, children: list[Evaluator], semantics: Semantics) -> Eval
 def _nary(values: list[np.ndarray], semantics: Semantics, sign: float) -> np.ndarray:
     """Conjunction (sign +1) or disjunction (sign -1) of the operands' values.
 
-    Classic chains reduce pairwise (no stacked copy); the new conjunction needs all operands
+    Both reduce operand by operand (no stacked copy); the new conjunction needs all operands
     at once, and its disjunction is `!(!a & !b & ...)`.
     """
     if semantics.name == "classic":
@@ -449,8 +450,7 @@ def _nary(values: list[np.ndarray], semantics: Semantics, sign: float) -> np.nda
         for value in values[1:]:
             result = pairwise(result, value)
         return result
-    stacked = np.stack(values, axis=-1)
-    return sign * new_conjunction(sign * stacked, semantics.nu)
+    return sign * new_conjunction_of([sign * value for value in values], semantics.nu)
 
 
 @_handles(ast.And)

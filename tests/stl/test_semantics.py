@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from stl_lfd.errors import SignalError, SpecError, StlNameError
-from stl_lfd.stl import HorizonWarning, compile_spec, parse
+from stl_lfd.stl import HorizonWarning, _numerics, compile_spec, parse
 from stl_lfd.stl._numerics import new_conjunction
 
 TIMES5 = np.arange(5.0)
@@ -189,3 +189,25 @@ def test_bad_semantics():
         compile_spec(parse("x > 0"), "new", nu=0)
     with pytest.raises(SpecError, match="unknown semantics"):
         compile_spec(parse("x > 0"), "fuzzy")
+
+
+@pytest.mark.parametrize("nu", [0.5, 1.0, 2.0, 30.0, 500.0])
+def test_new_conjunction_of_operands_equals_the_stacked_one(nu):
+    """`new_conjunction_of` (operand by operand, as `&` and `|` take it) against `new_conjunction`
+    of the stacked operands: signs, zeros, ties, infinities, magnitudes from 1e-300 to 1e300."""
+    rng = np.random.default_rng(int(nu * 10))
+    for _ in range(200):
+        count, shape = int(rng.integers(1, 7)), (int(rng.integers(1, 4)), int(rng.integers(1, 50)))
+        values = rng.normal(size=(count,) + shape) * rng.choice([1e-300, 1e-3, 1.0, 1e300])
+        values[rng.random(values.shape) < 0.1] = 0.0
+        values[rng.random(values.shape) < 0.05] = np.inf
+        values[rng.random(values.shape) < 0.03] = -np.inf
+        if rng.random() < 0.3:
+            values = np.round(values)
+        with np.errstate(all="ignore"):
+            expected = _numerics.new_conjunction(np.stack(list(values), axis=-1), nu)
+        actual = _numerics.new_conjunction_of(list(values), nu)
+        assert np.array_equal(np.isnan(actual), np.isnan(expected))
+        finite = np.isfinite(expected)
+        assert np.array_equal(actual[~finite], expected[~finite], equal_nan=True)
+        assert np.allclose(actual[finite], expected[finite], rtol=1e-12, atol=0)
