@@ -182,7 +182,7 @@ class HSMM:
         """
         self._check()
         dt = self.sample_period_ if dt is None else dt
-        path = self.nominal_path()
+        path = self._nominal_path()
         sequence = np.full(steps, path[-1], dtype=int)
         start = 0
         for state, end in zip(path[:-1], np.cumsum(self.duration_means_[path[:-1]]) / dt):
@@ -196,6 +196,10 @@ class HSMM:
         most likely successor of each, until a state without successors or one already visited.
         Ties go to the lower state number."""
         self._check()
+        return self._nominal_path()
+
+    def _nominal_path(self) -> list[int]:
+        """`nominal_path` of a checked model."""
         transmat = self.normalized_transmat()
         path = [int(np.argmax(self.startprob_))]
         while transmat[path[-1]].sum() > 0:

@@ -50,6 +50,7 @@ class SkillObjective:
         self.scene = scenes[0]
         self.backend = backend
         self._references: OrderedDict[bytes, list[Reference]] = OrderedDict()  # see plan_references
+        self._reference_sizes: dict[bytes, int] = {}  # bytes of each kept point's references
         # The parts the search method models: the spec's, or the spec's at each placement.
         self.composition = spec_composition(parts) if len(scenes) == 1 else placement_composition(parts, task.placements)
 
@@ -112,13 +113,13 @@ class SkillObjective:
     def _keep(self, keys: list[bytes], retrieved: dict[bytes, list[Reference]]) -> None:
         """Keep the `retrieved` references and mark `keys` as the latest used."""
         self._references.update(retrieved)
+        self._reference_sizes.update({key: sum(reference_bytes(reference) for reference in references) for key, references in retrieved.items()})
         for key in keys:
             self._references.move_to_end(key)
-        sizes = {key: sum(reference_bytes(reference) for reference in references) for key, references in self._references.items()}
-        total = sum(sizes.values())
+        total = sum(self._reference_sizes.values())
         while total > PLANNED_REFERENCE_BYTES and self._references:
             key, _ = self._references.popitem(last=False)
-            total -= sizes[key]
+            total -= self._reference_sizes.pop(key)
 
     def reference(self, models: dict[str, HSMM]) -> Reference:
         """What executing `models` means at the first placement (see `PlacedSkill.reference`)."""

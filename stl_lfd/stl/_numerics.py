@@ -603,31 +603,39 @@ _ROW_LOOP_MIN = 512
 def _interpolated_tail_sums(left: np.ndarray, rows: np.ndarray, start: int, ends: np.ndarray, scales: np.ndarray, nu: float) -> tuple[np.ndarray, np.ndarray]:
     """`_tail_sums` by interpolation where it is within `_INTERPOLATION_ERROR`: the sums
     (`2 x owners`, garbage where not taken) and the mask of the owners taken."""
-    used_rows, row_index = np.unique(rows, return_inverse=True)
+    present = np.zeros(left.shape[0], dtype=bool)
+    present[rows] = True
+    used_rows = np.flatnonzero(present)
+    row_index = (np.cumsum(present) - 1)[rows]
     stops = np.full(used_rows.size, start)
     np.maximum.at(stops, row_index, ends)
     values = np.array(left[used_rows, start : int(stops.max())])
     values[np.arange(values.shape[-1]) >= (stops - start)[:, None]] = np.inf  # no owner sums these
     finite = np.isfinite(values)
-    lows = np.where(finite, values, np.inf).min(axis=-1)
-    highs = np.where(finite, values, -np.inf).max(axis=-1)
-    lows, highs = np.where(finite.any(axis=-1), lows, 0.0), np.where(finite.any(axis=-1), highs, 0.0)
+    any_finite = finite.any(axis=-1)
+    lows = np.where(any_finite, np.where(finite, values, np.inf).min(axis=-1), 0.0)
+    highs = np.where(any_finite, np.where(finite, values, -np.inf).max(axis=-1), 0.0)
     needed = _nodes_needed(lows[row_index], highs[row_index], ends - start, scales, nu)  # 0: none will do
     row_nodes = _row_nodes(row_index, needed, ends - start, stops - start, _INTERPOLATION_COST)
-    needed[(needed == 0) | (needed > row_nodes[row_index])] = 0
+    owner_nodes = row_nodes[row_index]
+    taken = (needed > 0) & (needed <= owner_nodes)
     sums = np.zeros((2, ends.size))
     for count in np.unique(row_nodes[row_nodes > 0]):
         group = np.flatnonzero(row_nodes == count)
         nodes = _chebyshev_nodes(lows[group], highs[group], count)  # rows x R
         local = np.full(used_rows.size, -1)
         local[group] = np.arange(group.size)
+        members = np.flatnonzero(taken & (owner_nodes == count))
+        members = members[np.argsort(local[row_index[members]], kind="stable")]
+        member_rows = local[row_index[members]]
         step = max(1, _CHUNK_ELEMENTS // (count * values.shape[-1]))
-        for begin in range(0, group.size, step):
-            owners = np.flatnonzero((needed > 0) & (local[row_index] >= begin) & (local[row_index] < begin + step))
+        bounds = np.searchsorted(member_rows, np.arange(0, group.size + step, step))
+        for chunk, begin in enumerate(range(0, group.size, step)):
+            owners, owner_rows = members[bounds[chunk] : bounds[chunk + 1]], member_rows[bounds[chunk] : bounds[chunk + 1]]
             running = _running_basis_sums(values[group[begin : begin + step]], nodes[begin : begin + step])  # (samples + 1) x rows x R
-            counts = running[ends[owners] - start, local[row_index[owners]] - begin]  # owners x R
-            sums[:, owners] = _node_sums(nodes[local[row_index[owners]]], counts, scales[owners], nu)
-    return sums, needed > 0
+            counts = running[ends[owners] - start, owner_rows - begin]  # owners x R
+            sums[:, owners] = _node_sums(nodes[owner_rows], counts, scales[owners], nu)
+    return sums, taken
 
 
 def _row_nodes(row_index: np.ndarray, needed: np.ndarray, lengths: np.ndarray, spans: np.ndarray, cost: float) -> np.ndarray:
@@ -658,19 +666,24 @@ def _chebyshev_nodes(lows: np.ndarray, highs: np.ndarray, count: int) -> np.ndar
 def _nodes_needed(lows: np.ndarray, highs: np.ndarray, counts: np.ndarray, scales: np.ndarray, nu: float) -> np.ndarray:
     """The fewest of `_NODE_COUNTS` points at which interpolating each owner's terms over [low,
     high] errs by at most `_INTERPOLATION_ERROR` over its `counts` samples (bound above, in
-    logarithms); 0 where none does or the node values would be too large."""
+    logarithms; for a positive owner's numerator at the most points); 0 where none does or
+    the node values would be too large."""
     magnitudes = np.abs(scales)
     negative = scales < 0
     rates = np.where(negative, 1 + nu, nu) / magnitudes  # the larger of the owner's two rates
     points = np.array(_NODE_COUNTS)
     with np.errstate(all="ignore"):
         below = rates * (scales - lows)
-        constant = np.log(2 * np.maximum(counts, 1)) + below
-        bound = constant[:, None] + points * np.log(rates * (highs - lows) / 4)[:, None] - _LOG_FACTORIALS
-        peak = np.maximum(np.maximum(np.abs(lows), np.abs(highs)), magnitudes)
-        bound += np.where(negative[:, None], 0.0, np.log1p(points / (rates * peak)[:, None]))
-        fits = (bound <= math.log(_INTERPOLATION_ERROR)) & ((below <= _NODE_VALUE_LOG_MAX) & (highs > lows))[:, None]
-    needed = np.where(fits.any(axis=1) & (nu <= _FACTORED_NU_MAX), points[np.argmax(fits, axis=1)], 0)
+        margin = math.log(_INTERPOLATION_ERROR) - np.log(2 * np.maximum(counts, 1)) - below
+        if not negative.all():
+            peak = np.maximum(np.maximum(np.abs(lows), np.abs(highs)), magnitudes)
+            margin -= np.where(negative, 0.0, np.log1p(points[-1] / (rates * peak)))
+        log_reach = np.log(rates * (highs - lows) / 4)
+        usable = (below <= _NODE_VALUE_LOG_MAX) & (highs > lows) & (nu <= _FACTORED_NU_MAX)
+    needed = np.zeros(scales.size, dtype=int)
+    for count, log_factorial in zip(points[::-1], _LOG_FACTORIALS[::-1]):  # a count at a time: fast on long owners
+        np.copyto(needed, count, where=count * log_reach - log_factorial <= margin)
+    needed[~usable] = 0
     np.copyto(needed, _NODE_COUNTS[0], where=(highs == lows) & (nu <= _FACTORED_NU_MAX))  # one value: exact
     return needed
 
