@@ -664,27 +664,34 @@ def _chebyshev_nodes(lows: np.ndarray, highs: np.ndarray, count: int) -> np.ndar
 
 
 def _nodes_needed(lows: np.ndarray, highs: np.ndarray, counts: np.ndarray, scales: np.ndarray, nu: float) -> np.ndarray:
-    """The fewest of `_NODE_COUNTS` points at which interpolating each owner's terms over [low,
-    high] errs by at most `_INTERPOLATION_ERROR` over its `counts` samples (bound above, in
-    logarithms; for a positive owner's numerator at the most points); 0 where none does or
-    the node values would be too large."""
+    """The fewest of `_NODE_COUNTS` points at which interpolating each owner's sums over [low,
+    high] errs by at most `_INTERPOLATION_ERROR` over its `counts` samples, next to its own term
+    (bound above, in logarithms): the weights at rate nu / |m| and the numerators, at (1 + nu)
+    / |m| for a negative m, v exp(-nu (v - m) / |m|) for a positive one (whose derivatives carry
+    |v| + R / a, next to its own term m). 0 where none does, or where the node values would be
+    too large."""
     magnitudes = np.abs(scales)
     negative = scales < 0
-    rates = np.where(negative, 1 + nu, nu) / magnitudes  # the larger of the owner's two rates
+    weight_rates = nu / magnitudes
+    numerator_rates = np.where(negative, (1 + nu) / magnitudes, weight_rates)
     points = np.array(_NODE_COUNTS)
-    with np.errstate(all="ignore"):
-        below = rates * (scales - lows)
-        margin = math.log(_INTERPOLATION_ERROR) - np.log(2 * np.maximum(counts, 1)) - below
-        if not negative.all():
-            peak = np.maximum(np.maximum(np.abs(lows), np.abs(highs)), magnitudes)
-            margin -= np.where(negative, 0.0, np.log1p(points[-1] / (rates * peak)))
-        log_reach = np.log(rates * (highs - lows) / 4)
-        usable = (below <= _NODE_VALUE_LOG_MAX) & (highs > lows) & (nu <= _FACTORED_NU_MAX)
+    too_many = points[-1] + 1
     needed = np.zeros(scales.size, dtype=int)
-    for count, log_factorial in zip(points[::-1], _LOG_FACTORIALS[::-1]):  # a count at a time: fast on long owners
-        np.copyto(needed, count, where=count * log_reach - log_factorial <= margin)
-    needed[~usable] = 0
-    np.copyto(needed, _NODE_COUNTS[0], where=(highs == lows) & (nu <= _FACTORED_NU_MAX))  # one value: exact
+    with np.errstate(all="ignore"):
+        base = math.log(_INTERPOLATION_ERROR) - np.log(2 * np.maximum(counts, 1))
+        peak = np.maximum(np.maximum(np.abs(lows), np.abs(highs)), magnitudes)
+        numerator_scale = np.where(negative, 0.0, np.log((peak + points[-1] / weight_rates) / magnitudes))
+        for rates, scale in ((weight_rates, 0.0), (numerator_rates, numerator_scale)):
+            margin = base - rates * (scales - lows) - scale
+            log_reach = np.log(rates * (highs - lows) / 4)
+            fewest = np.full(scales.size, too_many)
+            for count, log_factorial in zip(points[::-1], _LOG_FACTORIALS[::-1]):  # a count at a time: fast on many owners
+                np.copyto(fewest, count, where=count * log_reach - log_factorial <= margin)
+            np.maximum(needed, fewest, out=needed)
+        # the larger rate is the numerators': exp(a (m - low)) at the nodes within e^2
+        values_bounded = (numerator_rates * (scales - lows) <= _NODE_VALUE_LOG_MAX) & (nu <= _FACTORED_NU_MAX)
+    needed[(needed == too_many) | ~values_bounded | ~(highs > lows)] = 0
+    np.copyto(needed, _NODE_COUNTS[0], where=(highs == lows) & values_bounded)  # one value: exact
     return needed
 
 

@@ -244,15 +244,43 @@ def test_interpolated_sums_match_term_by_term(seed, monkeypatch):
     rng = np.random.default_rng(seed)
     taken = 0
     for _ in range(40):
-        nu = float(rng.choice(NUS + (30.0,)))
+        nu = float(rng.choice((0.01, 0.1) + NUS + (30.0,)))
         left, rows, start, ends, scales = owned_sums_case(rng, nu)
         with np.errstate(all="ignore"):
             actual = _numerics._tail_sums(left, rows, start, ends, scales, nu)
             expected = _numerics._direct_tail_sums(left, rows, start, ends, scales, nu)
             taken += int(_numerics._interpolated_tail_sums(left, rows, start, ends, scales, nu)[1].sum())
-        scale = 1 + np.abs(expected)
-        assert np.max(np.abs(actual - expected) / scale) <= 1e-12
+        # next to the owner's own terms: weight 1, numerator 1 (negative m) or m (positive m)
+        own = np.stack([np.ones(scales.size), np.where(scales < 0, 1.0, scales)])
+        assert np.max(np.abs(actual - expected) / (own + np.abs(expected))) <= 1e-12
     assert taken > 2000  # of 12,000 owners: the interpolation was exercised
+
+
+def test_owners_far_below_their_samples_at_small_nu():
+    """A negative owner far below its samples, at small nu: its weights fall more slowly than its
+    numerators, and each is bounded at its own rate (the numerators' bound does not cover them)."""
+    samples = np.arange(600)
+    left = 0.001 + 0.5 * (1 - np.cos(2 * np.pi * samples / 600))
+    right = -2e-6 * (1 + 0.01 * np.sin(samples / 7))
+    with np.errstate(all="ignore"):
+        expected = reference_until(left, right, 0, 600, 1, 0.01)
+    assert difference(until_windows(left, right, 0, 600, 1, new_conjunction, 0.01), expected) <= 1e-12
+    left, right = 58 + 156 * np.arange(1000) / 1000, -np.ones(1000)
+    for nu in (0.1, 0.5, 1.0):
+        with np.errstate(all="ignore"):
+            expected = reference_until(left, right, 0, 1000, 1, nu)
+        assert difference(until_windows(left, right, 0, 1000, 1, new_conjunction, nu), expected) <= 1e-12
+
+
+def test_an_owner_of_only_infinite_samples_in_a_constant_row(monkeypatch):
+    """The row's one finite value far below an owner whose own samples are all +inf: no
+    interpolation point may overflow (its sums are 0)."""
+    monkeypatch.setattr(_numerics, "_INTERPOLATION_COST", 0)
+    left = np.array([np.inf] * 150 + [-1000.0] * 150)[None]
+    rows, ends, scales = np.array([0, 0]), np.array([150, 300]), np.array([0.01, -1001.0])
+    actual = _numerics._tail_sums(left, rows, 0, ends, scales, 1.0)
+    assert np.allclose(actual, _numerics._direct_tail_sums(left, rows, 0, ends, scales, 1.0), rtol=1e-12, atol=0)
+    assert np.array_equal(actual[:, 0], [0.0, 0.0])
 
 
 def test_interpolation_is_taken_only_where_it_pays():
@@ -271,8 +299,12 @@ def test_long_top_level_untils_match_the_reference(seed, monkeypatch):
     """Untils over 400-700 samples at their first outputs, on smooth traces that cross zero,
     batched: the candidates whose right operand owns them sum long prefixes by interpolation."""
     rng = np.random.default_rng(100 + seed)
+    interpolated = []
+    original = _numerics._node_sums
+    monkeypatch.setattr(_numerics, "_node_sums", lambda nodes, counts, scales, nu: interpolated.append(scales.size) or original(nodes, counts, scales, nu))
     for free in (False, True):
         if free:
+            assert sum(interpolated) > 300  # taken where it pays
             monkeypatch.setattr(_numerics, "_INTERPOLATION_COST", 0)
         for _ in range(3):
             samples = int(rng.integers(400, 700))
