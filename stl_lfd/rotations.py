@@ -151,14 +151,20 @@ def checked_quaternions(q: np.ndarray, source: str) -> np.ndarray:
 
 def tilt(q: np.ndarray) -> np.ndarray:
     """The angle (rad) between the hand's approach axis (its local z) and straight down."""
-    approach = to_matrix(q)[..., :, 2]
-    return np.arccos(np.clip(-approach[..., 2], -1.0, 1.0))
+    return np.arccos(np.clip(-_vertical_of_z(q), -1.0, 1.0))
 
 
 def uprightness(q: np.ndarray) -> np.ndarray:
     """The angle (rad, 0 to pi/2) between an object's z axis and the vertical, either way up: a
     cylinder's axis has no direction (0 for an upright shaft, pi/2 for a lying one)."""
-    return np.arccos(np.clip(np.abs(to_matrix(q)[..., 2, 2]), 0.0, 1.0))
+    return np.arccos(np.clip(np.abs(_vertical_of_z(q)), 0.0, 1.0))
+
+
+def _vertical_of_z(q: np.ndarray) -> np.ndarray:
+    """The vertical component of the local z axis: `to_matrix(q)[..., 2, 2]`, alone."""
+    q = np.asarray(q, dtype=float)
+    x, y = q[..., 0], q[..., 1]
+    return 1 - 2 * (x * x + y * y)
 
 
 def from_euler(roll: float, pitch: float, yaw: float) -> np.ndarray:
