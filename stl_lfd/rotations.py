@@ -14,6 +14,8 @@ Arrays hold one quaternion or rotation vector per row: `... x 4` and `... x 3`. 
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from stl_lfd.errors import SignalError
@@ -170,4 +172,10 @@ def _vertical_of_z(q: np.ndarray) -> np.ndarray:
 def from_euler(roll: float, pitch: float, yaw: float) -> np.ndarray:
     """The quaternion of roll, pitch and yaw (rad) as PyBullet and scenes give them: about x,
     then y, then z, all fixed axes."""
+    return _euler_quaternion(float(roll), float(pitch), float(yaw)).copy()
+
+
+@functools.lru_cache(maxsize=256)
+def _euler_quaternion(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """`from_euler`, kept: scenes ask for the same few orientations at every execution."""
     return multiply(from_rotvec([0.0, 0.0, yaw]), multiply(from_rotvec([0.0, pitch, 0.0]), from_rotvec([roll, 0.0, 0.0])))
