@@ -611,31 +611,72 @@ def _interpolated_tail_sums(left: np.ndarray, rows: np.ndarray, start: int, ends
     np.maximum.at(stops, row_index, ends)
     values = np.array(left[used_rows, start : int(stops.max())])
     values[np.arange(values.shape[-1]) >= (stops - start)[:, None]] = np.inf  # no owner sums these
+    lows, highs = _finite_range(values)
+    points, taken = _points_taken(row_index, lows, highs, ends - start, stops - start, scales, nu, _INTERPOLATION_COST)
+    sums = np.zeros((2, ends.size))
+    owners = np.flatnonzero(taken)
+    sums[:, owners] = _interpolated_sums(
+        values, lows, highs, points, row_index[owners], np.zeros(owners.size, dtype=int), ends[owners] - start, scales[owners], nu
+    )
+    return sums, taken
+
+
+def _finite_range(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest and highest finite value of each row of `rows x samples` (0 and 0 for none)."""
     finite = np.isfinite(values)
     any_finite = finite.any(axis=-1)
     lows = np.where(any_finite, np.where(finite, values, np.inf).min(axis=-1), 0.0)
     highs = np.where(any_finite, np.where(finite, values, -np.inf).max(axis=-1), 0.0)
-    needed = _nodes_needed(lows[row_index], highs[row_index], ends - start, scales, nu)  # 0: none will do
-    row_nodes = _row_nodes(row_index, needed, ends - start, stops - start, _INTERPOLATION_COST)
-    owner_nodes = row_nodes[row_index]
-    taken = (needed > 0) & (needed <= owner_nodes)
-    sums = np.zeros((2, ends.size))
-    for count in np.unique(row_nodes[row_nodes > 0]):
-        group = np.flatnonzero(row_nodes == count)
+    return lows, highs
+
+
+def _points_taken(
+    row_index: np.ndarray, lows: np.ndarray, highs: np.ndarray, lengths: np.ndarray, spans: np.ndarray, scales: np.ndarray, nu: float, cost: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The points each row interpolates at (`rows`, 0: none, see `_row_nodes`) and the mask of
+    the owners (`owners`: their rows, the terms each sums, their scales) that take them: those
+    for which the row's points are exact enough."""
+    needed = _nodes_needed(lows[row_index], highs[row_index], lengths, scales, nu)
+    points = _row_nodes(row_index, needed, lengths, spans, cost)
+    return points, (needed > 0) & (needed <= points[row_index])
+
+
+def _interpolated_sums(
+    values: np.ndarray,
+    lows: np.ndarray,
+    highs: np.ndarray,
+    points: np.ndarray,
+    owner_rows: np.ndarray,
+    firsts: np.ndarray,
+    stops: np.ndarray,
+    scales: np.ndarray,
+    nu: float,
+) -> np.ndarray:
+    """Weights and numerators (`2 x owners`) of each owner's terms over values[row, first :
+    stop], interpolated at its row's `points` Chebyshev points of [low, high]. Rows are taken by
+    number of points, in chunks whose running sums stay within `_CHUNK_ELEMENTS`.
+
+    Args:
+        values: `rows x samples`, +inf where no owner sums; lows, highs, points: `rows`.
+        owner_rows, firsts, stops, scales: `owners`, whose rows have points.
+    """
+    sums = np.zeros((2, owner_rows.size))
+    for count in np.unique(points[points > 0]):
+        group = np.flatnonzero(points == count)
         nodes = _chebyshev_nodes(lows[group], highs[group], count)  # rows x R
-        local = np.full(used_rows.size, -1)
+        local = np.full(points.size, -1)
         local[group] = np.arange(group.size)
-        members = np.flatnonzero(taken & (owner_nodes == count))
-        members = members[np.argsort(local[row_index[members]], kind="stable")]
-        member_rows = local[row_index[members]]
+        members = np.flatnonzero(local[owner_rows] >= 0)
+        members = members[np.argsort(local[owner_rows[members]], kind="stable")]
+        member_rows = local[owner_rows[members]]
         step = max(1, _CHUNK_ELEMENTS // (count * values.shape[-1]))
         bounds = np.searchsorted(member_rows, np.arange(0, group.size + step, step))
         for chunk, begin in enumerate(range(0, group.size, step)):
-            owners, owner_rows = members[bounds[chunk] : bounds[chunk + 1]], member_rows[bounds[chunk] : bounds[chunk + 1]]
+            owners, rows = members[bounds[chunk] : bounds[chunk + 1]], member_rows[bounds[chunk] : bounds[chunk + 1]]
             running = _running_basis_sums(values[group[begin : begin + step]], nodes[begin : begin + step])  # (samples + 1) x rows x R
-            counts = running[ends[owners] - start, owner_rows - begin]  # owners x R
-            sums[:, owners] = _node_sums(nodes[owner_rows], counts, scales[owners], nu)
-    return sums, taken
+            counts = running[stops[owners], rows - begin] - running[firsts[owners], rows - begin]  # owners x R
+            sums[:, owners] = _node_sums(nodes[rows], counts, scales[owners], nu)
+    return sums
 
 
 def _row_nodes(row_index: np.ndarray, needed: np.ndarray, lengths: np.ndarray, spans: np.ndarray, cost: float) -> np.ndarray:
@@ -779,41 +820,21 @@ def _interpolated_windows(values: np.ndarray, width: int, count: int, nu: float)
     numerators, under its minimum, by interpolation over its group's span where that is exact,
     term by term elsewhere."""
     shape = values.shape[:-1]
-    span = 2 * width - 1
     groups = -(-count // width)
-    padded = _pad(values, groups * width + width - 1, np.inf)[..., : groups * width + width - 1].reshape(-1, groups * width + width - 1)
-    rows = padded.shape[0]
+    length = groups * width + width - 1
+    padded = _pad(values, length, np.inf)[..., :length].reshape(-1, length)
     minima = window_min(padded, width, count)  # rows x count
     result = minima.copy()  # -inf, +inf and 0 are their own values
     row, output = np.nonzero(np.isfinite(minima) & (minima != 0))
-    finite = np.isfinite(padded)
-    lows = window_min(np.where(finite, padded, np.inf), span, groups * width)[:, ::width]  # rows x groups
-    highs = -window_min(np.where(finite, -padded, np.inf), span, groups * width)[:, ::width]
-    cell = row * groups + output // width
-    empty = ~np.isfinite(lows.reshape(-1))
-    cell_lows, cell_highs = np.where(empty, 0.0, lows.reshape(-1)), np.where(empty, 0.0, highs.reshape(-1))
     scales = minima[row, output]
-    needed = _nodes_needed(cell_lows[cell], cell_highs[cell], np.full(row.size, width), scales, nu)
-    cell_nodes = _row_nodes(cell, needed, np.full(row.size, width), np.full(rows * groups, span), _WINDOW_INTERPOLATION_COST)
-    needed[(needed == 0) | (needed > cell_nodes[cell])] = 0
-    sums = np.zeros((2, row.size))
-    spans = sliding_window_view(padded, span, axis=-1)
-    for points in np.unique(cell_nodes[cell_nodes > 0]):
-        cells = np.flatnonzero(cell_nodes == points)
-        nodes = _chebyshev_nodes(cell_lows[cells], cell_highs[cells], points)
-        local = np.full(rows * groups, -1)
-        local[cells] = np.arange(cells.size)
-        step = max(1, _CHUNK_ELEMENTS // (points * span))
-        for begin in range(0, cells.size, step):
-            part = cells[begin : begin + step]
-            owners = np.flatnonzero((needed > 0) & (local[cell] >= begin) & (local[cell] < begin + step))
-            running = _running_basis_sums(spans[part // groups, (part % groups) * width], nodes[begin : begin + step])
-            offsets, columns = output[owners] % width, local[cell[owners]] - begin
-            counts = running[offsets + width, columns] - running[offsets, columns]  # owners x R
-            sums[:, owners] = _node_sums(nodes[local[cell[owners]]], counts, scales[owners], nu)
-    taken = needed > 0
-    values_taken = np.where(scales[taken] < 0, scales[taken] * sums[1, taken], sums[1, taken]) / sums[0, taken]
-    result[row[taken], output[taken]] = values_taken
+    spans = sliding_window_view(padded, 2 * width - 1, axis=-1)[:, ::width].reshape(-1, 2 * width - 1)  # (rows x groups) x span
+    lows, highs = _finite_range(spans)
+    cell = row * groups + output // width
+    points, taken = _points_taken(cell, lows, highs, np.full(row.size, width), np.full(spans.shape[0], spans.shape[1]), scales, nu, _WINDOW_INTERPOLATION_COST)
+    owners = np.flatnonzero(taken)
+    offsets = output[owners] % width
+    numerators, weights = _interpolated_sums(spans, lows, highs, points, cell[owners], offsets, offsets + width, scales[owners], nu)[::-1]
+    result[row[owners], output[owners]] = np.where(scales[owners] < 0, scales[owners] * numerators, numerators) / weights
     rest = np.flatnonzero(~taken)
     windows = sliding_window_view(padded, width, axis=-1)
     step = max(1, _CHUNK_ELEMENTS // width)
