@@ -56,6 +56,10 @@ def new_conjunction(values: np.ndarray, nu: float) -> np.ndarray:
     return np.where(np.isfinite(minimum), result, minimum)
 
 
+# Operands of fewer elements than this, more than four of them, are stacked (measured).
+_STACKED_BELOW = 128
+
+
 def new_conjunction_of(operands: list[np.ndarray], nu: float) -> np.ndarray:
     """`new_conjunction` of a few arrays of one shape, operand by operand: the same values (to
     rounding), without stacking them (a short last axis reduces slowly).
@@ -67,6 +71,8 @@ def new_conjunction_of(operands: list[np.ndarray], nu: float) -> np.ndarray:
     Returns:
         `...` array.
     """
+    if len(operands) > 4 and np.size(operands[0]) < _STACKED_BELOW:  # many small operands: a loop would cost more
+        return new_conjunction(np.stack(np.broadcast_arrays(*operands), axis=-1), nu)
     minimum = operands[0]
     for operand in operands[1:]:
         minimum = np.minimum(minimum, operand)
