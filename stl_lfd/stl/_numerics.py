@@ -584,9 +584,10 @@ def _tail_block(left: np.ndarray, rows: np.ndarray, start: int, ends: np.ndarray
 # running sums of the basis, once per row, and R terms per owner instead of e. At Chebyshev
 # points the error is at most 2 ((hi - lo) / 4)^R max |f^(R)| / R! per sample, where
 # max |f^(R)| = a^R exp(a (m - lo)) (times (R / a + max |v|) for v exp(..)): an owner takes the
-# interpolation when its samples' errors add up to at most _INTERPOLATION_ERROR, next to its
-# own term 1 (and for a positive numerator, next to max |v|), and when f stays within e^2 at
-# the nodes (rounding); the others sum term by term. A row takes it only where it costs less.
+# interpolation when, for each of its two sums at its own rate, its samples' errors add up to
+# at most _INTERPOLATION_ERROR next to its own term (1, or m for a positive numerator), and
+# when f stays within e^2 at the nodes (rounding); the others sum term by term. A row takes
+# it only where it costs less.
 # Bounded windows under the new robustness (`_interpolated_windows`) do the same with the
 # windows' minima as owners: a window's sums are differences of two running sums.
 #
