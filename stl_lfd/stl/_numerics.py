@@ -518,9 +518,9 @@ def _tail_sums(left: np.ndarray, rows: np.ndarray, start: int, ends: np.ndarray,
     (`_interpolated_tail_sums`), the others term by term.
     """
     lengths = ends - start
-    long = np.flatnonzero(lengths >= 4 * _NODE_COUNTS[0])
+    long = np.flatnonzero(lengths >= 4 * _POINT_COUNTS[0])
     # interpolation costs at least the fewest points times the longest sum
-    if long.size == 0 or lengths[long].sum() < _NODE_COUNTS[0] * _INTERPOLATION_COST * lengths.max():
+    if long.size == 0 or lengths[long].sum() < _POINT_COUNTS[0] * _INTERPOLATION_COST * lengths.max():
         return _direct_tail_sums(left, rows, start, ends, scales, nu)
     sums = np.empty((2, ends.size))
     sums[:, long], taken = _interpolated_tail_sums(left, rows[long], start, ends[long], scales[long], nu)
@@ -592,9 +592,9 @@ def _tail_block(left: np.ndarray, rows: np.ndarray, start: int, ends: np.ndarray
 # windows' minima as owners: a window's sums are differences of two running sums.
 #
 # Numbers of points R an owner may take (the fewest that are exact enough), and its row with it.
-_NODE_COUNTS = (12, 16, 20, 24, 32, 40, 48)
+_POINT_COUNTS = (12, 16, 20, 24, 32, 40, 48)
 _INTERPOLATION_ERROR = 1e-14
-_LOG_FACTORIALS = np.array([math.lgamma(count + 1) for count in _NODE_COUNTS])
+_LOG_FACTORIALS = np.array([math.lgamma(count + 1) for count in _POINT_COUNTS])
 # Largest log f(t_r) an owner's node values may reach: the interpolation's rounding grows with
 # them (f is at most 1 on the owner's own samples, larger below its scale).
 _NODE_VALUE_LOG_MAX = 2.0
@@ -640,11 +640,11 @@ def _finite_range(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _points_taken(
     row_index: np.ndarray, lows: np.ndarray, highs: np.ndarray, lengths: np.ndarray, spans: np.ndarray, scales: np.ndarray, nu: float, cost: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The points each row interpolates at (`rows`, 0: none, see `_row_nodes`) and the mask of
+    """The points each row interpolates at (`rows`, 0: none, see `_row_points`) and the mask of
     the owners (`owners`: their rows, the terms each sums, their scales) that take them: those
     for which the row's points are exact enough."""
-    needed = _nodes_needed(lows[row_index], highs[row_index], lengths, scales, nu)
-    points = _row_nodes(row_index, needed, lengths, spans, cost)
+    needed = _points_needed(lows[row_index], highs[row_index], lengths, scales, nu)
+    points = _row_points(row_index, needed, lengths, spans, cost)
     return points, (needed > 0) & (needed <= points[row_index])
 
 
@@ -686,7 +686,7 @@ def _interpolated_sums(
     return sums
 
 
-def _row_nodes(row_index: np.ndarray, needed: np.ndarray, lengths: np.ndarray, spans: np.ndarray, cost: float) -> np.ndarray:
+def _row_points(row_index: np.ndarray, needed: np.ndarray, lengths: np.ndarray, spans: np.ndarray, cost: float) -> np.ndarray:
     """Number of points of each row (0: none), the cheapest: each point costs `cost` times the
     row's span and its owners' count, owners that need more sum their terms one by one.
 
@@ -694,7 +694,7 @@ def _row_nodes(row_index: np.ndarray, needed: np.ndarray, lengths: np.ndarray, s
         row_index: `owners` rows; needed: `owners` points each needs (0: none will do);
         lengths: `owners` terms each sums; spans: `rows` samples each row's sums run over.
     """
-    counts = np.array(_NODE_COUNTS)
+    counts = np.array(_POINT_COUNTS)
     rows, kinds = spans.size, counts.size + 1
     kind = np.where(needed > 0, np.searchsorted(counts, needed), counts.size)  # counts.size: none
     cell = row_index * kinds + kind
@@ -711,8 +711,8 @@ def _chebyshev_nodes(lows: np.ndarray, highs: np.ndarray, count: int) -> np.ndar
     return (lows + highs)[:, None] / 2 + (highs - lows)[:, None] / 2 * np.cos(angles)
 
 
-def _nodes_needed(lows: np.ndarray, highs: np.ndarray, counts: np.ndarray, scales: np.ndarray, nu: float) -> np.ndarray:
-    """The fewest of `_NODE_COUNTS` points at which interpolating each owner's sums over [low,
+def _points_needed(lows: np.ndarray, highs: np.ndarray, counts: np.ndarray, scales: np.ndarray, nu: float) -> np.ndarray:
+    """The fewest of `_POINT_COUNTS` points at which interpolating each owner's sums over [low,
     high] errs by at most `_INTERPOLATION_ERROR` over its `counts` samples, next to its own term
     (bound above, in logarithms): the weights at rate nu / |m| and the numerators, at (1 + nu)
     / |m| for a negative m, v exp(-nu (v - m) / |m|) for a positive one (whose derivatives carry
@@ -722,7 +722,7 @@ def _nodes_needed(lows: np.ndarray, highs: np.ndarray, counts: np.ndarray, scale
     negative = scales < 0
     weight_rates = nu / magnitudes
     numerator_rates = np.where(negative, (1 + nu) / magnitudes, weight_rates)
-    points = np.array(_NODE_COUNTS)
+    points = np.array(_POINT_COUNTS)
     too_many = points[-1] + 1
     needed = np.zeros(scales.size, dtype=int)
     with np.errstate(all="ignore"):
@@ -739,7 +739,7 @@ def _nodes_needed(lows: np.ndarray, highs: np.ndarray, counts: np.ndarray, scale
         # the larger rate is the numerators': exp(a (m - low)) at the nodes within e^2
         values_bounded = (numerator_rates * (scales - lows) <= _NODE_VALUE_LOG_MAX) & (nu <= _FACTORED_NU_MAX)
     needed[(needed == too_many) | ~values_bounded | ~(highs > lows)] = 0
-    np.copyto(needed, _NODE_COUNTS[0], where=(highs == lows) & values_bounded)  # one value: exact
+    np.copyto(needed, _POINT_COUNTS[0], where=(highs == lows) & values_bounded)  # one value: exact
     return needed
 
 
