@@ -472,9 +472,7 @@ def _cumulative_sums(values: np.ndarray, rows: np.ndarray, starts: np.ndarray, l
     windows = sliding_window_view(_pad(values, values.shape[-1] + int(spans[-1]), np.inf), int(spans[-1]), axis=-1)
     factored = nu <= _FACTORED_NU_MAX and np.all(np.isfinite((1 + nu) / np.abs(scales)))
     if factored:  # the terms below are exp(-nu x) and its numerator up to these constants
-        negative = scales < 0
-        factors[0] = np.exp(np.where(negative, -nu, nu))
-        factors[1] = np.exp(np.where(negative, -(1 + nu), nu))
+        factors = _factored_constants(scales, nu)
     base = 0
     for block, span, size in zip(blocks, spans, sizes):
         owners = order[block]
@@ -488,6 +486,13 @@ def _cumulative_sums(values: np.ndarray, rows: np.ndarray, starts: np.ndarray, l
             terms[...] = _terms(segment, scales[owners, None], nu)
         np.cumsum(terms, axis=-1, out=terms)
     return _Runs(sums, offsets, factors)
+
+
+def _factored_constants(scales: np.ndarray, nu: float) -> np.ndarray:
+    """`2 x k`: the constants `_factored_terms`' weights and numerators are multiplied by to be
+    `_terms`' (-nu x = -nu v / |m| -+ nu, and -(1 + nu) x for a negative numerator)."""
+    negative = scales < 0
+    return np.exp(np.stack([np.where(negative, -nu, nu), np.where(negative, -(1 + nu), nu)]))
 
 
 def _factored_terms(values: np.ndarray, scales: np.ndarray, nu: float, out: np.ndarray) -> None:
@@ -791,26 +796,12 @@ def _node_sums(nodes: np.ndarray, counts: np.ndarray, scales: np.ndarray, nu: fl
     """Weights and numerators (`2 x owners`) from each owner's terms at its row's nodes
     (`owners x R`) and the running basis sums there (`counts`, `owners x R`).
 
-    exp(-a (t - m)) is taken as exp(-a t) times exp(a m) = e^(+-nu): the nodes are at most
-    _NODE_VALUE_LOG_MAX below m, so neither factor leaves the floating-point range.
+    The terms are taken factored (`_factored_terms`): the nodes are at most
+    _NODE_VALUE_LOG_MAX below m and nu at most _FACTORED_NU_MAX, so nothing overflows.
     """
-    negative = scales < 0
-    rates = nu / np.abs(scales)
-    weights = np.multiply(nodes, -rates[:, None])
-    np.exp(weights, out=weights)
-    sums = np.empty((2, scales.size))
-    sums[0] = np.einsum("or,or->o", weights, counts)
-    if negative.any():
-        if nu == 1:
-            sums[1] = np.einsum("or,or,or->o", weights, weights, counts)
-        else:
-            sums[1] = np.einsum("or,or->o", np.exp(nodes * -((1 + nu) / np.abs(scales))[:, None]), counts)
-    if not negative.all():
-        sums[1] = np.where(negative, sums[1], np.einsum("or,or,or->o", nodes, weights, counts))
-    factors = np.exp(np.where(negative, -nu, nu))
-    sums[0] *= factors
-    sums[1] *= np.where(negative, np.exp(-(1 + nu)), factors)
-    return sums
+    terms = np.empty((2,) + nodes.shape)
+    _factored_terms(nodes, scales, nu, out=terms)
+    return np.einsum("wor,or->wo", terms, counts) * _factored_constants(scales, nu)
 
 
 # Windows at least this wide take the interpolation where it is exact (see above): outputs are

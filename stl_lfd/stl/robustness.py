@@ -450,7 +450,9 @@ def _nary(values: list[np.ndarray], semantics: Semantics, sign: float) -> np.nda
         for value in values[1:]:
             result = pairwise(result, value)
         return result
-    return sign * new_conjunction_of([sign * value for value in values], semantics.nu)
+    if sign > 0:
+        return new_conjunction_of(values, semantics.nu)
+    return -new_conjunction_of([-value for value in values], semantics.nu)
 
 
 @_handles(ast.And)
