@@ -73,6 +73,25 @@ def new_conjunction_of(operands: list[np.ndarray], nu: float) -> np.ndarray:
     """
     if len(operands) > 4 and np.size(operands[0]) < _STACKED_BELOW:  # many small operands: a loop would cost more
         return new_conjunction(np.stack(np.broadcast_arrays(*operands), axis=-1), nu)
+    shape = np.broadcast_shapes(*(np.shape(operand) for operand in operands))
+    size = math.prod(shape)
+    if size <= _CACHED_OPERAND_ELEMENTS:
+        return _conjunction_of(operands, nu)
+    flat = [np.broadcast_to(operand, shape).reshape(-1) for operand in operands]
+    result = np.empty(size)
+    for begin in range(0, size, _CACHED_OPERAND_ELEMENTS):
+        chunk = slice(begin, begin + _CACHED_OPERAND_ELEMENTS)
+        result[chunk] = _conjunction_of([operand[chunk] for operand in flat], nu)
+    return result.reshape(shape)
+
+
+# Elements of each operand that `new_conjunction_of` takes at once: its operands and
+# temporaries stay in cache (measured: 3 operands of 128 x 2,200, 12.6 ms whole, 4.6 ms so).
+_CACHED_OPERAND_ELEMENTS = 1 << 13
+
+
+def _conjunction_of(operands: list[np.ndarray], nu: float) -> np.ndarray:
+    """`new_conjunction_of` on operands of one shape, all at once."""
     minimum = operands[0]
     for operand in operands[1:]:
         minimum = np.minimum(minimum, operand)
