@@ -702,7 +702,7 @@ def _interpolated_sums(
         members = np.flatnonzero(local[owner_rows] >= 0)
         members = members[np.argsort(local[owner_rows[members]], kind="stable")]
         member_rows = local[owner_rows[members]]
-        step = max(1, (1 << 18) // (count * values.shape[-1]))
+        step = max(1, _CACHED_ELEMENTS // (count * values.shape[-1]))
         bounds = np.searchsorted(member_rows, np.arange(0, group.size + step, step))
         for chunk, begin in enumerate(range(0, group.size, step)):
             owners, rows = members[bounds[chunk] : bounds[chunk + 1]], member_rows[bounds[chunk] : bounds[chunk + 1]]
@@ -864,16 +864,21 @@ def _interpolated_windows(values: np.ndarray, width: int, count: int, nu: float)
 
 def _blocks(sizes: np.ndarray, budget: int) -> list[slice]:
     """Consecutive slices of `sizes` (non-decreasing) whose length times largest size stays
-    within `budget` (at least one element a slice)."""
+    within `budget` (at least one element a slice), and whose largest size is at most twice
+    the smallest or `_PADDED_SIZE`: a slice padded to its largest wastes at most half."""
     blocks, begin = [], 0
     while begin < sizes.size:
         most = max(1, budget // max(1, int(sizes[begin])))
         candidates = sizes[begin : begin + most]
-        fits = np.arange(1, candidates.size + 1) * np.maximum(candidates, 1) <= budget
+        fits = (np.arange(1, candidates.size + 1) * np.maximum(candidates, 1) <= budget) & (candidates <= max(2 * int(sizes[begin]), _PADDED_SIZE))
         taken = candidates.size if fits.all() else max(1, int(np.argmin(fits)))
         blocks.append(slice(begin, begin + taken))
         begin += taken
     return blocks
+
+
+# Sizes up to which `_blocks` pads freely (a block's calls cost more than its padding).
+_PADDED_SIZE = 64
 
 
 def _pad(values: np.ndarray, length: int, fill: float) -> np.ndarray:
