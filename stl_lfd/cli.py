@@ -23,6 +23,7 @@ from typing import Iterator, Optional
 import typer
 from typer.core import TyperArgument, TyperCommand
 
+from stl_lfd.allocator import keep_freed_memory
 from stl_lfd.choices import BACKENDS, SEMANTICS
 from stl_lfd.errors import ConfigError, ExecutionError, ModelError, StlLfdError
 from stl_lfd.optim.methods import method_names
@@ -96,6 +97,7 @@ def user_errors(on_interrupt: str = "interrupted") -> Iterator[None]:
 def main() -> None:
     """The `stlopt` program. After Ctrl-C it dies by SIGINT (not a plain exit 130), so that a
     shell loop of runs stops instead of going on to the next one."""
+    keep_freed_memory()
     try:
         app()
     except SystemExit as stop:
