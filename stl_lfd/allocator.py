@@ -6,7 +6,8 @@ from the system and returns them on free, so that every such array pays its page
 a fifth of the new robustness's until. `keep_freed_memory` raises the thresholds, as the
 `MALLOC_MMAP_THRESHOLD_` and `MALLOC_TRIM_THRESHOLD_` variables would: arrays up to
 `MMAP_THRESHOLD` come from the heap, and up to `TRIM_THRESHOLD` of freed heap stays with the
-process for reuse (its peak memory is unchanged). Elsewhere than glibc it does nothing.
+process for reuse (its peak memory grows by a few percent). Elsewhere than glibc it does
+nothing.
 """
 
 from __future__ import annotations
