@@ -754,25 +754,34 @@ def _points_needed(lows: np.ndarray, highs: np.ndarray, counts: np.ndarray, scal
     negative = scales < 0
     weight_rates = nu / magnitudes
     numerator_rates = np.where(negative, (1 + nu) / magnitudes, weight_rates)
-    points = np.array(_POINT_COUNTS)
-    too_many = points[-1] + 1
-    needed = np.zeros(scales.size, dtype=int)
+    too_many = _POINT_COUNTS[-1] + 1
     with np.errstate(all="ignore"):
         base = math.log(_INTERPOLATION_ERROR) - np.log(2 * np.maximum(counts, 1))
         peak = np.maximum(np.maximum(np.abs(lows), np.abs(highs)), magnitudes)
-        numerator_scale = np.where(negative, 0.0, np.log((peak + points[-1] / weight_rates) / magnitudes))
-        for rates, scale in ((weight_rates, 0.0), (numerator_rates, numerator_scale)):
-            margin = base - rates * (scales - lows) - scale
-            log_reach = np.log(rates * (highs - lows) / 4)
-            fewest = np.full(scales.size, too_many)
-            for count, log_factorial in zip(points[::-1], _LOG_FACTORIALS[::-1]):  # a count at a time: fast on many owners
-                np.copyto(fewest, count, where=count * log_reach - log_factorial <= margin)
-            np.maximum(needed, fewest, out=needed)
+        numerator_scale = np.where(negative, 0.0, np.log((peak + _POINT_COUNTS[-1] / weight_rates) / magnitudes))
+        needed = _fewest_points(numerator_rates, numerator_scale, lows, highs, scales, base)
+        # Where m >= low the numerators' bound is the stricter (a rate at least the weights',
+        # a scale at least 0): the weights' is checked only below the range.
+        below = np.flatnonzero(scales < lows)
+        if below.size:
+            weights_needed = _fewest_points(weight_rates[below], 0.0, lows[below], highs[below], scales[below], base[below])
+            needed[below] = np.maximum(needed[below], weights_needed)
         # the larger rate is the numerators': exp(a (m - low)) at the nodes within e^2
         values_bounded = (numerator_rates * (scales - lows) <= _NODE_VALUE_LOG_MAX) & (nu <= _FACTORED_NU_MAX)
     needed[(needed == too_many) | ~values_bounded | ~(highs > lows)] = 0
     np.copyto(needed, _POINT_COUNTS[0], where=(highs == lows) & values_bounded)  # one value: exact
     return needed
+
+
+def _fewest_points(rates: np.ndarray, scale: np.ndarray | float, lows: np.ndarray, highs: np.ndarray, scales: np.ndarray, base: np.ndarray) -> np.ndarray:
+    """The fewest of `_POINT_COUNTS` for which the bound of `_points_needed` holds for one sum
+    at `rates` (its derivatives times exp(`scale`)), or one more than the most."""
+    margin = base - rates * (scales - lows) - scale
+    log_reach = np.log(rates * (highs - lows) / 4)
+    fewest = np.full(scales.size, _POINT_COUNTS[-1] + 1)
+    for count, log_factorial in zip(_POINT_COUNTS[::-1], _LOG_FACTORIALS[::-1]):  # a count at a time: fast on many owners
+        np.copyto(fewest, count, where=count * log_reach - log_factorial <= margin)
+    return fewest
 
 
 def _running_basis_sums(values: np.ndarray, nodes: np.ndarray) -> np.ndarray:
