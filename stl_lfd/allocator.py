@@ -5,9 +5,10 @@ the terms of a batch of plans). glibc serves each array above its threshold with
 from the system and returns them on free, so that every such array pays its page faults again:
 a fifth of the new robustness's until. `keep_freed_memory` raises the thresholds, as the
 `MALLOC_MMAP_THRESHOLD_` and `MALLOC_TRIM_THRESHOLD_` variables would: arrays up to
-`MMAP_THRESHOLD` come from the heap, and up to `TRIM_THRESHOLD` of freed heap stays with the
-process for reuse (its peak memory grows by a few percent). Elsewhere than glibc it does
-nothing.
+`MMAP_THRESHOLD` come from the heap, which returns freed memory at its top to the system only
+beyond `TRIM_THRESHOLD`. So the process keeps what its largest arrays freed, until it ends
+(freed memory below a live allocation is kept whatever the threshold); its peak memory grew
+by a few percent in a run measured. Elsewhere than glibc it does nothing.
 """
 
 from __future__ import annotations
@@ -24,10 +25,12 @@ _M_MMAP_THRESHOLD = -3
 
 
 def keep_freed_memory() -> bool:
-    """Set this process's thresholds, and the variables that give processes it starts the same
-    (a user's own setting of them is left as it is). True where glibc took them."""
+    """Set this process's thresholds, and the variables that give processes it starts the same.
+    A user's own setting of either threshold (by these variables or `GLIBC_TUNABLES`) is left
+    as it is, and so is the other. True where glibc took them."""
     settings = {"MALLOC_MMAP_THRESHOLD_": MMAP_THRESHOLD, "MALLOC_TRIM_THRESHOLD_": TRIM_THRESHOLD}
-    if any(name in os.environ for name in settings):
+    tunables = os.environ.get("GLIBC_TUNABLES", "")
+    if any(name in os.environ for name in settings) or "mmap_threshold" in tunables or "trim_threshold" in tunables:
         return False
     mallopt = _mallopt()
     if mallopt is None:

@@ -46,3 +46,8 @@ def test_an_array_allocated_again_reuses_the_freed_pages():
 def test_a_users_own_setting_is_left_as_it_is():
     result = run("keep", MALLOC_MMAP_THRESHOLD_="65536")
     assert result["kept"] is False and result["variable"] == "65536"
+
+
+def test_a_users_glibc_tunables_are_left_as_they_are():
+    result = run("keep", GLIBC_TUNABLES="glibc.malloc.mmap_threshold=65536")
+    assert result["kept"] is False and result["variable"] is None

@@ -876,7 +876,8 @@ def _interpolated_windows(values: np.ndarray, width: int, count: int, nu: float)
 def _blocks(sizes: np.ndarray, budget: int) -> list[slice]:
     """Consecutive slices of `sizes` (non-decreasing) whose length times largest size stays
     within `budget` (at least one element a slice), and whose largest size is at most twice
-    the smallest or `_PADDED_SIZE`: a slice padded to its largest wastes at most half."""
+    the smallest or `_PADDED_SIZE`: a slice padded to its largest wastes at most half of it,
+    or pads short sizes to at most `_PADDED_SIZE`."""
     blocks, begin = [], 0
     while begin < sizes.size:
         most = max(1, budget // max(1, int(sizes[begin])))
