@@ -23,6 +23,20 @@ def median_seconds(function: Callable[[], object], repeats: int = 7, number: int
     return statistics.median(runs)
 
 
+def paired_median_seconds(first: Callable[[], object], second: Callable[[], object], repeats: int = 9, numbers: tuple[int, int] = (1, 1)) -> tuple[float, float]:
+    """`median_seconds` of two functions timed in turns (`numbers` calls of each a turn), so
+    that their ratio is taken under the same conditions on a machine whose speed varies."""
+    first(), second()
+    runs: tuple[list[float], list[float]] = ([], [])
+    for _ in range(repeats):
+        for function, number, times in zip((first, second), numbers, runs):
+            start = time.perf_counter()
+            for _ in range(number):
+                function()
+            times.append((time.perf_counter() - start) / number)
+    return statistics.median(runs[0]), statistics.median(runs[1])
+
+
 @dataclass
 class Row:
     case: str

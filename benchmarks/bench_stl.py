@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks._timing import Row, format_seconds, median_seconds, print_table
+from benchmarks._timing import Row, format_seconds, median_seconds, paired_median_seconds, print_table
 from stl_lfd.stl import compile_spec, load_spec, parse
 from stl_lfd.stl.evaluate import evaluate_file
 from stl_lfd.stl.parser import MAX_DEPTH
@@ -91,8 +91,7 @@ def until_rows() -> list[Row]:
     rows = []
     for text in UNTIL_FORMULAS:
         classic, new = (compile_spec(parse(text), semantics) for semantics in ("classic", "new"))
-        classic_seconds = median_seconds(lambda: classic(signals, times), number=20)
-        new_seconds = median_seconds(lambda: new(signals, times), repeats=5)
+        classic_seconds, new_seconds = paired_median_seconds(lambda: classic(signals, times), lambda: new(signals, times), numbers=(20, 1))
         note = f"classic {format_seconds(classic_seconds)}, new/classic {new_seconds / classic_seconds:.0f}x"
         rows.append(Row(f"{text}, new", "2,200 samples", new_seconds, UNTIL_RATIO_TARGET * classic_seconds, note))
     return rows
