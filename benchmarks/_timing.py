@@ -23,7 +23,9 @@ def median_seconds(function: Callable[[], object], repeats: int = 7, number: int
     return statistics.median(runs)
 
 
-def paired_median_seconds(first: Callable[[], object], second: Callable[[], object], repeats: int = 9, numbers: tuple[int, int] = (1, 1)) -> tuple[float, float]:
+def paired_median_seconds(
+    first: Callable[[], object], second: Callable[[], object], repeats: int = 9, numbers: tuple[int, int] = (1, 1)
+) -> tuple[float, float]:
     """`median_seconds` of two functions timed in turns (`numbers` calls of each a turn), so
     that their ratio is taken under the same conditions on a machine whose speed varies."""
     first(), second()
