@@ -236,6 +236,8 @@ def until_windows(left: np.ndarray, right: np.ndarray, lo: int, width: int, coun
 # every candidate's operands cost count x width^2. A single output whose right operand stays
 # below left still needs its own sum for every j: width^2 / 2 terms, inherent to the formula.
 # The totals, the bulk of that case, are taken in cache-sized blocks of owners x samples.
+# A single output (a top-level until) has its own kernel, `_first_output_candidates`: all its
+# sums start at sample 0, so that every owner's is one tail sum, taken in one call.
 
 # Elements of one block of owners x samples: small enough to stay in cache.
 _BLOCK_ELEMENTS = 1 << 16
@@ -252,6 +254,9 @@ def _new_until(left: np.ndarray, right: np.ndarray, lo: int, width: int, count: 
     length = count + width - 1
     left = _pad(left, length, np.inf)[..., :length].reshape(-1, length)
     right = _pad(right, length, -np.inf)[..., :length].reshape(-1, length)
+    if count == 1:  # a top-level until: the first sample only
+        with np.errstate(all="ignore"):
+            return _disjunction(_first_output_candidates(left, right, lo, nu), nu).reshape(shape + (1,))
     step = max(1, _CHUNK_ELEMENTS // (4 * left.shape[0] * width))
     parts = []
     for begin in range(0, count, step):
@@ -284,6 +289,47 @@ def _until_candidates(left: np.ndarray, right: np.ndarray, lo: int, width: int, 
         values.reshape(-1)[at_left] = sums[1] / sums[0]
     np.multiply(values, minimum, out=values, where=minimum < 0)
     np.copyto(values, minimum, where=~owned)
+    return values
+
+
+def _first_output_candidates(left: np.ndarray, right: np.ndarray, lo: int, nu: float) -> np.ndarray:
+    """`_until_candidates` of the first output alone (count 1): `B x (width - lo)`.
+
+    Every sum then starts at sample 0, so that each owner's is one tail sum, right's and
+    left's owners in one call: right[j] over left[0 .. j-1]; left's first minimum q over
+    left[0 .. q-1], plus running sums from q on (shared by the candidates it owns, up to the
+    next lower sample) and right[j].
+    """
+    width = left.shape[-1]
+    before = _prefix_minima(left, width, 1)  # B x 1 x width
+    first = _first_minima(left, before)[:, 0, lo:]  # q
+    prefix_min, operand = before[:, 0, lo:], right[:, lo:]
+    minimum = np.minimum(prefix_min, operand)
+    owned = np.isfinite(minimum) & (minimum != 0)  # -inf, +inf and 0 are their own values
+    by_right = owned & (operand < prefix_min)
+    right_rows, right_at = np.nonzero(by_right)
+    left_rows, left_at = np.nonzero(owned & ~by_right)
+    owners = left_rows * width + first[left_rows, left_at]  # sorted: q grows with j
+    new_owner = np.diff(owners, prepend=-1) != 0
+    starts = np.flatnonzero(new_owner)  # each owner's first candidate
+    owner = np.cumsum(new_owner) - 1  # each candidate's owner
+    owner_rows, positions = np.divmod(owners[starts], width)
+    scales = np.concatenate([operand[right_rows, right_at], left[owner_rows, positions]])
+    sums = _tail_sums(left, np.concatenate([right_rows, owner_rows]), 0, np.concatenate([right_at + lo, positions]), scales, nu)
+    values = minimum.copy()
+    if right_rows.size:  # right[j]'s own term: weight 1, numerator 1 (m < 0) or m
+        own = np.where(scales[: right_rows.size] < 0, 1.0, scales[: right_rows.size])
+        values[right_rows, right_at] = (sums[1, : right_rows.size] + own) / (sums[0, : right_rows.size] + 1.0)
+    if left_rows.size:
+        left_scales, tails = scales[right_rows.size :], sums[:, right_rows.size :]
+        ends = left_at + lo  # each candidate's prefix is left[0 .. end-1]
+        last = np.maximum.reduceat(ends, starts)
+        forward = _cumulative_sums(left, owner_rows, positions, last - positions, left_scales, nu)
+        run = forward.offsets[owner] + ends - positions[owner] - 1  # the sum over left[q .. end-1]
+        left_sums = np.take(forward.sums, run, axis=1) * np.take(forward.factors, owner, axis=1)
+        left_sums += np.take(tails, owner, axis=1) + _terms(right[left_rows, ends], left_scales[owner], nu)
+        values[left_rows, left_at] = left_sums[1] / left_sums[0]
+    np.multiply(values, minimum, out=values, where=owned & (minimum < 0))
     return values
 
 

@@ -113,6 +113,25 @@ def test_random_operands_match_the_reference(seed):
         assert difference(actual, expected) <= TOLERANCE, (left, right, lo, width, count, nu, actual, expected)
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_the_first_output_alone_matches_the_reference_and_the_first_of_two(seed):
+    """600 cases of a top-level until (count 1, its own kernel) against the reference and
+    against the first output of two (the general kernel), from 1 to 300 samples."""
+    rng = np.random.default_rng(50 + seed)
+    for case in range(150):
+        left, right, lo, width, _, nu = random_case(rng)
+        if case % 2:  # longer traces, where the sums are interpolated
+            samples = int(rng.integers(100, 300))
+            left, right = operands(rng, (2, samples)), operands(rng, (2, samples))
+            width = int(rng.integers(1, samples + 3))
+            lo = int(rng.integers(0, min(width, 3)))
+        alone = until_windows(left, right, lo, width, 1, new_conjunction, nu)
+        first_of_two = until_windows(left, right, lo, width, 2, new_conjunction, nu)[..., :1]
+        assert difference(alone, first_of_two) <= 1e-12, (left, right, lo, width, nu)
+        with np.errstate(all="ignore"):
+            assert difference(alone, reference_until(left, right, lo, width, 1, nu)) <= TOLERANCE
+
+
 @pytest.mark.parametrize("scale", [1e-300, 1e-308, 1e300, 1e150])
 @pytest.mark.parametrize("nu", [1.0, 3.0, 40.0, 500.0])
 def test_extreme_magnitudes_and_sharpness(scale, nu):
