@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import ctypes
 import os
+from typing import Callable
 
 MMAP_THRESHOLD = 32 << 20  # bytes; glibc's own largest dynamic threshold
 TRIM_THRESHOLD = 256 << 20  # bytes
@@ -41,7 +42,7 @@ def keep_freed_memory() -> bool:
     return taken
 
 
-def _mallopt():
+def _mallopt() -> Callable[[int, int], int] | None:
     """glibc's `mallopt`, from the symbols the process has loaded, or None."""
     try:
         function = ctypes.CDLL(None).mallopt
