@@ -742,6 +742,7 @@ def _interpolated_sums(
         owner_rows, firsts, stops, scales: `owners`, whose rows have points.
     """
     sums = np.zeros((2, owner_rows.size))
+    from_start = not firsts.any()  # tail sums: L_r(0) = 0 need not be subtracted
     for count in sorted(set(points[points > 0].tolist())):  # np.unique costs more on a few rows
         group = np.flatnonzero(points == count)
         nodes = _chebyshev_nodes(lows[group], highs[group], count)  # rows x R
@@ -758,7 +759,7 @@ def _interpolated_sums(
             flat = running.reshape(-1, count)  # ((samples + 1) x rows) x R: np.take is faster than [stops, rows]
             chunk_rows = running.shape[1]
             counts = np.take(flat, stops[owners] * chunk_rows + rows - begin, axis=0)  # owners x R
-            if firsts.any():
+            if not from_start:
                 counts -= np.take(flat, firsts[owners] * chunk_rows + rows - begin, axis=0)
             sums[:, owners] = _node_sums(nodes[rows], counts, scales[owners], nu)
     return sums

@@ -441,8 +441,8 @@ def _not(node: ast.Not, children: list[Evaluator], semantics: Semantics) -> Eval
 def _nary(values: list[np.ndarray], semantics: Semantics, sign: float) -> np.ndarray:
     """Conjunction (sign +1) or disjunction (sign -1) of the operands' values.
 
-    Both reduce operand by operand (no stacked copy); the new conjunction needs all operands
-    at once, and its disjunction is `!(!a & !b & ...)`.
+    Classic chains reduce pairwise; the new conjunction weighs every operand against their
+    minimum (`new_conjunction_of`, operand by operand), and its disjunction is `!(!a & !b & ...)`.
     """
     if semantics.name == "classic":
         pairwise = np.minimum if sign > 0 else np.maximum
