@@ -1,8 +1,8 @@
-"""phi3 over seeds with the PyBullet backend: satisfaction, trials to first satisfaction, peak
+"""phi3 over seeds on a simulated Panda: satisfaction, trials to first satisfaction, peak
 contact force over the holder and the time the pick reaches the shaft, before and after, and
 how many pick states the best behaviour still visits.
 
-    python -m benchmarks.bench_phi3 [--specs phi3_strict,phi3] [--seeds 5]
+    python -m benchmarks.bench_phi3 [--specs phi3_strict,phi3] [--seeds 5] [--backend mujoco]
 
 About 4 minutes per spec on 2 cores (two runs side by side).
 """
@@ -42,10 +42,10 @@ def insertion_and_pick(path: Path) -> tuple[float, float | None]:
     return peak, float(table.times[at_shaft][0]) if at_shaft.any() else None
 
 
-def one_run(arguments: tuple[str, int]) -> dict:
-    spec, seed = arguments
+def one_run(arguments: tuple[str, int, str | None]) -> dict:
+    spec, seed, backend = arguments
     warnings.simplefilter("ignore")
-    task = load_task(ROOT / "configs" / f"{spec}.yaml").with_overrides(seed=seed)
+    task = load_task(ROOT / "configs" / f"{spec}.yaml").with_overrides(seed=seed, backend=backend)
     with tempfile.TemporaryDirectory() as folder:
         summary = finish_run(start_run(task, Path(folder) / "run"))
         run = RunDirectory(Path(folder) / "run")
@@ -60,11 +60,13 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--specs", default="phi3_strict,phi3")
     parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--backend", default=None, help="the simulator (default: each task's)")
     args = parser.parse_args(argv)
-    jobs = [(spec, seed) for spec in args.specs.split(",") for seed in range(args.seeds)]
+    jobs = [(spec, seed, args.backend) for spec in args.specs.split(",") for seed in range(args.seeds)]
     finished = dict(local_map(one_run, jobs, 2))
     results = [finished[job] for job in jobs]
-    table = Table(title="phi3 over seeds (pybullet, 16 trials: 8 Sobol + PI)", title_justify="left")
+    engine = args.backend or "each task's backend"
+    table = Table(title=f"phi3 over seeds ({engine}; the tasks' trials and methods)", title_justify="left")
     for column in ("spec", "seed", "satisfied", "first", "peak force before → after (N)", "pick at shaft before → after (s)", "pick states", "time"):
         table.add_column(column)
     for r in results:

@@ -35,6 +35,7 @@ from rich.console import Console
 from rich.table import Table
 
 from stl_lfd.optim.runs.sweep import local_map
+from stl_lfd.sim.backend import Capabilities
 from stl_lfd.sim.kinematic import KinematicBackend
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -86,7 +87,7 @@ class LaggingBackend(KinematicBackend):
     reference through a first-order lag of LAG_SECONDS and sits SAG below it. The reference
     (the plan) is unchanged, so its robustness is no longer the execution's."""
 
-    plays_the_plan = False
+    capabilities = Capabilities()
 
     def run(self, reference, scene, rate, observer=None):
         from scipy.signal import lfilter
@@ -119,8 +120,8 @@ def executed_as(problem: str):
     robot = LaggingBackend() if variant == "lag" else VARIANTS[variant]
     original = run.new_backend
 
-    def imperfect(name, command=None):
-        return robot if name == "kinematic" else original(name, command)
+    def imperfect(name, options=None):
+        return robot if name == "kinematic" else original(name, options)
 
     run.new_backend = imperfect
     try:

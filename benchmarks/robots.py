@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from stl_lfd.signals import SignalTable
+from stl_lfd.sim.backend import Capabilities
 from stl_lfd.sim.kinematic import KinematicBackend
 from stl_lfd.sim.reference import Rollout
 
@@ -34,7 +35,7 @@ class ImperfectRobot(KinematicBackend):
     seed: int = 0
 
     name = "kinematic"
-    plays_the_plan = False
+    capabilities = Capabilities()
 
     def run(self, reference, scene, rate, observer=None) -> Rollout:
         rollout = super().run(reference, scene, rate, observer)

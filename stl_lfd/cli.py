@@ -24,9 +24,10 @@ import typer
 from typer.core import TyperArgument, TyperCommand
 
 from stl_lfd.allocator import keep_freed_memory
-from stl_lfd.choices import BACKENDS, SEMANTICS
+from stl_lfd.choices import SEMANTICS
 from stl_lfd.errors import ConfigError, ExecutionError, ModelError, StlLfdError
 from stl_lfd.optim.methods import method_names
+from stl_lfd.sim.registry import DEFAULT_BACKEND, backend_names, backends_help
 
 
 class _PlainUsage(TyperCommand):
@@ -53,7 +54,7 @@ def _choices(name: str, values: tuple[str, ...]) -> type[Enum]:
 
 
 SemanticsOption = _choices("SemanticsOption", SEMANTICS)
-BackendOption = _choices("BackendOption", BACKENDS)
+BackendOption = _choices("BackendOption", backend_names())
 MethodOption = _choices("MethodOption", method_names())
 
 
@@ -296,9 +297,7 @@ def retrieve(
 def rollout(
     model_file: Path = typer.Argument(..., metavar="MODEL_OR_BEHAVIOUR", help="Model file written by 'stlopt learn', or a behaviour file (.yaml)."),
     scene: Optional[str] = typer.Option(None, help="Built-in scene name or a scene .yaml file (default: the behaviour's, or free_space)."),
-    backend: BackendOption = typer.Option(
-        BackendOption.pybullet, help="pybullet simulates a Panda; kinematic records the reference itself; command runs --command."
-    ),
+    backend: BackendOption = typer.Option(BackendOption(DEFAULT_BACKEND), help=f"Execution backend ({backends_help()})."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="Signal CSV to write (default: stdout)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Seconds to execute (default: the skill's expected duration)."),
     rate: float = typer.Option(100.0, "--rate", help="Recording rate in samples per second."),
@@ -326,22 +325,27 @@ def rollout(
         _check_duration_and_rate(duration, rate)
         if output is not None:
             check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
-        runner = _backend(backend.value, _command(command, command_timeout, None))
+        from stl_lfd.sim import BackendOptions, new_backend
+
         skill = PlacedSkill.load(model_file, scene, place, duration)
         reference = skill.reference()
-        start = time.perf_counter()
-        if backend is BackendOption.pybullet and reference.duration > LONG_ROLLOUT_SECONDS:
-            with _progress_bar(f"simulating {reference.duration:.0f} s", int(reference.duration)) as advance:
-                result = skill.execute(runner, rate, _whole_seconds(advance), reference)
-        else:
-            result = skill.execute(runner, rate, reference=reference)
-        elapsed = time.perf_counter() - start
+        executor = _command(command, command_timeout, None)
+        _check_command_for(backend.value, executor)
+        with new_backend(backend.value, BackendOptions(command=executor)) as runner:
+            capabilities = runner.capabilities
+            start = time.perf_counter()
+            if capabilities.simulates and reference.duration > LONG_ROLLOUT_SECONDS:
+                with _progress_bar(f"simulating {reference.duration:.0f} s", int(reference.duration)) as advance:
+                    result = skill.execute(runner, rate, _whole_seconds(advance), reference)
+            else:
+                result = skill.execute(runner, rate, reference=reference)
+            elapsed = time.perf_counter() - start
         write_signal_csv(result.signals, output if output is not None else sys.stdout)
     recorded = result.signals.duration
     tracking = f"tracking error RMS {1000 * result.tracking_rms:.2f} mm, worst {1000 * result.tracking_max:.2f} mm"
-    if backend is BackendOption.kinematic:  # it plays the reference back: no speed or tracking to speak of
+    if capabilities.plays_the_plan:  # it plays the reference back: no speed or tracking to speak of
         how = f"{recorded:.2f} s of the reference played back (no dynamics)"
-    elif backend is BackendOption.pybullet:
+    elif capabilities.simulates:
         how = f"{recorded:.2f} s simulated in {elapsed:.2f} s ({recorded / max(elapsed, 1e-9):.0f}x real time); {tracking}"
     else:
         how = f"{recorded:.2f} s executed by the command in {elapsed:.2f} s; {tracking}"
@@ -371,18 +375,17 @@ def _placements(scene_name: str, place: list[str]):
     """The one placement of --place options (None without any), checked against the scene."""
     if not place:
         return None
-    from stl_lfd.sim import load_scene
+    from stl_lfd.sim.scene_file import load_scene, placement_from_options
 
-    return (load_scene(scene_name).placement_from_options(place),)
+    return (placement_from_options(load_scene(scene_name), place),)
 
 
-def _backend(name: str, command):
-    """A backend object for a one-off execution (the command backend needs its command)."""
-    if command is not None and name != "command":
-        raise ConfigError("--command is for --backend command")
-    from stl_lfd.sim import new_backend
+def _check_command_for(backend: str, command) -> None:
+    """ConfigError when --command is given for a backend that runs no command."""
+    from stl_lfd.sim import backend_class
 
-    return new_backend(name, command) if name == "command" else name
+    if command is not None and not backend_class(backend).capabilities.needs_command:
+        raise ConfigError(f"--command is for --backend command (the run's backend is {backend})")
 
 
 def _whole_seconds(advance):
@@ -411,7 +414,8 @@ def replay(
         ..., metavar="MODEL_BEHAVIOUR_OR_RUN", help="A model file, a behaviour file, or a run directory written by 'stlopt optimize'."
     ),
     trial: str = typer.Option("best", "--trial", help="For a run directory: 'best', 'initial' (the unoptimised skill) or a trial number."),
-    gui: bool = typer.Option(False, "--gui", help="Show the PyBullet GUI in real time (needs a display)."),
+    gui: bool = typer.Option(False, "--gui", help="Show the simulator's window in real time (needs a display)."),
+    backend: Optional[BackendOption] = typer.Option(None, help="Simulator to replay in (default: the run's, if it simulates; else pybullet)."),
     video: Optional[Path] = typer.Option(None, "--video", help="Record a video (.mp4 or .gif) headless."),
     spec: Optional[Path] = typer.Option(None, "--spec", help="STL spec to evaluate and whose regions to draw (a run directory knows its own)."),
     scene: Optional[str] = typer.Option(None, help="Scene (default: the run's, or free_space)."),
@@ -419,7 +423,7 @@ def replay(
     semantics: Optional[SemanticsOption] = typer.Option(None, help="Semantics of the printed robustness (default: the run's, or new)."),
     place: list[str] = typer.Option([], "--place", help=PLACE_HELP + " Default: the run's (first) placement."),
 ) -> None:
-    """Execute a skill again in PyBullet and show it (GUI) or film it (video).
+    """Execute a skill again in a simulator and show it (GUI) or film it (video).
 
     Without --gui or --video, the GUI opens when a display exists; otherwise a video is
     written (replay.mp4, or replay-trial-N.mp4 inside a run directory). When a spec is known,
@@ -435,7 +439,7 @@ def replay(
     from stl_lfd.report.replay import ReplayRequest, replay_skill
 
     use_gui = gui or (video is None and bool(os.environ.get("DISPLAY")))
-    request = ReplayRequest(source, trial, spec, scene, duration, semantics.value if semantics else None, tuple(place))
+    request = ReplayRequest(source, trial, spec, scene, duration, semantics.value if semantics else None, tuple(place), backend.value if backend else None)
     with user_errors():
         if gui and not os.environ.get("DISPLAY"):
             raise ExecutionError("--gui needs a display and DISPLAY is not set; record a video with --video FILE.mp4 instead")
@@ -498,8 +502,7 @@ def optimize(
             prepared = resume_run(run_dir, iterations, file_task, given)
         else:
             task = given.applied_to(file_task)
-            if given.command is not None and task.backend != "command":
-                raise ConfigError(f"--command is for --backend command (the run's backend is {task.backend})")
+            _check_command_for(task.backend, given.command)
             say = (lambda message: None) if quiet else (lambda message: print(message, file=sys.stderr))
             prepared = start_run(task, run_dir, say, inputs_record(file_task, given, task))
     again = f"stlopt optimize {task_file} --out {run_dir} --resume"

@@ -32,6 +32,7 @@ from stl_lfd.optim.trials import Trial, best_trial
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim import Command
+from stl_lfd.sim.registry import DEFAULT_BACKEND
 from stl_lfd.stl import Spec, format_spec
 
 SPEC_FILE = "spec.stl"  # the spec of a run started from Python, written into its directory
@@ -88,7 +89,7 @@ def optimize(
     *,
     duration: float,
     scene: str = "free_space",
-    backend: str = "pybullet",
+    backend: str = DEFAULT_BACKEND,
     semantics: str = "new",
     nu: float = 1.0,
     rate: float = 100.0,

@@ -20,7 +20,8 @@ from stl_lfd.optim.task import Task
 from stl_lfd.optim.trials import Outcome
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
-from stl_lfd.sim import Backend, CommandBackend, Reference, Scene, load_scene, new_backend
+from stl_lfd.sim import Backend, BackendOptions, CommandBackend, Reference, Scene, load_scene, new_backend
+from stl_lfd.sim.registry import backend_class
 from stl_lfd.sim.tracking import TrackingModel
 from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour
 from stl_lfd.skill.placed import PlacedSkill, placed_scene
@@ -61,7 +62,7 @@ class SkillObjective:
     @property
     def plays_the_plan(self) -> bool:
         """Whether executions are the plan itself (the kinematic backend): no tracking to learn."""
-        return bool(getattr(self.backend, "plays_the_plan", False))
+        return self.backend is not None and self.backend.capabilities.plays_the_plan
 
     def exchange_in(self, folder: Path) -> None:
         """Write the command backend's exchange folders in `folder` (the run directory)."""
@@ -204,7 +205,7 @@ def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = N
     `task.spec` when given; with a backend of its own unless not `execute`); spec problems are
     found here, before any trial: unknown signals, and windows that reach past the rollout
     duration."""
-    if len(task.placements) > 1 and task.backend == "command":
+    if len(task.placements) > 1 and backend_class(task.backend).capabilities.needs_command:
         raise ConfigError(f"{task.source}: several placements need a simulated backend (the command backend executes one reference per trial)")
     space = build_search_space(models, task.parameters, task.source)
     spec = load_spec(task.spec) if spec is None else spec
@@ -223,7 +224,7 @@ def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = N
             str(task.spec),
         )
     behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None
-    backend = new_backend(task.backend, task.command) if execute else None
+    backend = new_backend(task.backend, BackendOptions(command=task.command)) if execute else None
     return space, SkillObjective(models, space, task, behaviour, scene, parts, backend)
 
 

@@ -11,13 +11,14 @@ from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
-from stl_lfd.choices import BACKENDS, SEMANTICS
+from stl_lfd.choices import SEMANTICS
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_PLACEMENTS, MAX_STATES, samples_problem
 from stl_lfd.optim.settings import SINGLE_SKILL, Optimizer, Parameters, choice, located, optimizer_from_yaml, parameters_from_yaml
 from stl_lfd.poses import Pose
 from stl_lfd.sim.command import DEFAULT_TIMEOUT, Command
-from stl_lfd.sim.scene import scene_reference
+from stl_lfd.sim.registry import DEFAULT_BACKEND, backend_class, backend_names
+from stl_lfd.sim.scene_file import scene_reference
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
 
@@ -51,8 +52,8 @@ class Task:
     placements: tuple[dict[str, Pose], ...] = ()
 
     def __post_init__(self) -> None:
-        if self.backend == "command" and self.command is None:
-            raise ConfigError(f"{self.source}: the command backend needs the command that executes a trial ('command' in the task file, or --command)")
+        if backend_class(self.backend).capabilities.needs_command and self.command is None:
+            raise ConfigError(f"{self.source}: the {self.backend} backend needs the command that executes a trial ('command' in the task file, or --command)")
 
     def with_overrides(self, **changes: Any) -> "Task":
         """A copy with the settings of an `Overrides` (`spec`, `backend`, `command`, `placements`,
@@ -193,7 +194,7 @@ def parse_task(data: dict[str, Any], path: Path) -> Task:
     base = path.parent
     behaviour = _existing(base, data["behaviour"], path, "behaviour") if "behaviour" in data else None
     semantics = choice(data.get("semantics", "new"), SEMANTICS, path, "semantics")
-    backend = choice(data.get("backend", "pybullet"), BACKENDS, path, "backend")
+    backend = choice(data.get("backend", DEFAULT_BACKEND), backend_names(), path, "backend")
     task = Task(
         name=_name(data.get("name", path.stem), path),
         spec=_existing(base, data["spec"], path, "spec"),
@@ -228,17 +229,17 @@ def _behaviour_scene(behaviour: Path) -> str:
 
 def _placements(data: dict[str, Any], path: Path, scene_name: str) -> tuple[dict[str, Pose], ...]:
     """`place: {FRAME: POSE}` (one placement) or `placements: [{FRAME: POSE}, ...]`."""
-    from stl_lfd.sim import load_scene
+    from stl_lfd.sim.scene_file import load_scene, placement_from_yaml
 
     if "place" in data and "placements" in data:
         raise ConfigError(f"{path}: give 'place' (one placement) or 'placements' (several), not both")
     scene = load_scene(scene_name)
     if "place" in data:
-        return (scene.placement_from_yaml(data["place"], path, "place"),)
+        return (placement_from_yaml(scene, data["place"], path, "place"),)
     items = data["placements"]
     if not isinstance(items, list) or not items or len(items) > MAX_PLACEMENTS:
         raise ConfigError(f"{path}: 'placements' must be a list of 1 to {MAX_PLACEMENTS} placements (each mapping frames to poses)")
-    return tuple(scene.placement_from_yaml(item, path, f"placements[{index}]") for index, item in enumerate(items))
+    return tuple(placement_from_yaml(scene, item, path, f"placements[{index}]") for index, item in enumerate(items))
 
 
 def _skill_parameters(data: Any, path: Path, behaviour: Path | None) -> dict[str, Parameters]:

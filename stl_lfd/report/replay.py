@@ -1,4 +1,4 @@
-"""`stlopt replay`: execute a skill again in PyBullet, in the GUI or into a video.
+"""`stlopt replay`: execute a skill again in a simulator, in its GUI or into a video.
 
 The skill comes from a model file, a behaviour file, or a trial of a run directory (which
 also names the spec, scene, duration, semantics and object placements of the run; a run with
@@ -16,7 +16,8 @@ from stl_lfd.errors import ConfigError, ExecutionError
 from stl_lfd.files import atomic_output, check_output_file
 from stl_lfd.hsmm import HSMM
 from stl_lfd.poses import Pose
-from stl_lfd.sim import DEFAULT_RATE
+from stl_lfd.sim import DEFAULT_RATE, BackendOptions, new_backend
+from stl_lfd.sim.registry import DEFAULT_BACKEND, backend_class, backend_names
 from stl_lfd.skill.behaviour import load_behaviour, load_skill
 from stl_lfd.skill.execution import scene_with_spec_regions
 from stl_lfd.skill.placed import PlacedSkill, placed_scene
@@ -36,6 +37,7 @@ class ReplayRequest:
     duration: float | None = None
     semantics: str | None = None
     place: tuple[str, ...] = ()  # NAME=x,y[,z[,yaw]] texts for the scene's object frames
+    backend: str | None = None  # a backend that films (default: the run's, if it does; else DEFAULT_BACKEND)
 
 
 @dataclass(frozen=True)
@@ -52,6 +54,7 @@ class Skill:
     nu: float
     default_video: Path
     placements: tuple[dict[str, Pose], ...] = ()
+    backend: str = DEFAULT_BACKEND
 
 
 @dataclass(frozen=True)
@@ -75,34 +78,32 @@ def replay_skill(request: ReplayRequest, gui: bool, video: Path | None, progress
     behaviour = load_behaviour(skill.behaviour) if skill.behaviour is not None else None
     placed = PlacedSkill(skill.models, behaviour, placed_scene(scene, placement), skill.duration)
     if gui:
-        from stl_lfd.sim.panda import PyBulletBackend, pace_real_time
+        from stl_lfd.sim.video import pace_real_time
 
-        backend = PyBulletBackend(gui=True)
-        try:
+        with new_backend(skill.backend, BackendOptions(gui=True)) as backend:
             rollout = placed.execute(backend, DEFAULT_RATE, pace_real_time())
-        finally:
-            backend.close()
         written, frames = None, 0
     else:
         written = video
-        rollout, frames = _film(placed, written, progress)
+        rollout, frames = _film(placed, skill.backend, written, progress)
     robustness = None
     if skill.spec is not None:
         robustness = evaluate_table(skill.spec, rollout.signals, skill.semantics, skill.nu).robustness
     return ReplayOutcome(robustness, skill.semantics, skill.spec, written, frames)
 
 
-def _film(placed: PlacedSkill, path: Path, progress: ProgressFactory):
+def _film(placed: PlacedSkill, backend_name: str, path: Path, progress: ProgressFactory):
     """Execute while filming into `path`; the file appears only once it is complete."""
     from stl_lfd.sim.video import VideoRecorder, frame_count
 
     reference, camera = placed.reference(), placed.scene.camera
-    with atomic_output(path) as partial, progress(f"filming {path.name}", frame_count(reference.duration, camera.fps)) as advance:
-        recorder = VideoRecorder(partial, camera, advance)
-        try:
-            rollout = placed.execute("pybullet", DEFAULT_RATE, recorder, reference)
-        finally:
-            recorder.close()
+    with new_backend(backend_name) as backend:
+        with atomic_output(path) as partial, progress(f"filming {path.name}", frame_count(reference.duration, camera.fps)) as advance:
+            recorder = VideoRecorder(partial, camera, advance)
+            try:
+                rollout = placed.execute(backend, DEFAULT_RATE, recorder, reference)
+            finally:
+                recorder.close()
     return rollout, recorder.frames
 
 
@@ -124,6 +125,7 @@ def resolve_skill(request: ReplayRequest) -> Skill:
             nu=task.nu,
             default_video=source / f"replay-trial-{run.trial}.mp4",
             placements=task.placements,
+            backend=filming_backend(request.backend or (task.backend if backend_class(task.backend).capabilities.films else None)),
         )
     if not source.exists():
         raise ConfigError(f"{source}: no such model file, behaviour file or run directory")
@@ -139,4 +141,14 @@ def resolve_skill(request: ReplayRequest) -> Skill:
         semantics=request.semantics or "new",
         nu=1.0,
         default_video=Path("replay.mp4"),
+        backend=filming_backend(request.backend),
     )
+
+
+def filming_backend(name: str | None) -> str:
+    """`name` (default: `DEFAULT_BACKEND`), checked to be a backend that films."""
+    name = name or DEFAULT_BACKEND
+    if not backend_class(name).capabilities.films:
+        filming = [other for other in backend_names() if backend_class(other).capabilities.films]
+        raise ConfigError(f"the {name} backend cannot replay a skill to watch (choose from {', '.join(filming)})")
+    return name

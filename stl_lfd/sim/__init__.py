@@ -1,132 +1,80 @@
 """Execution of reference trajectories: backends, scenes and signal recording.
 
 One interface, `execute(reference, scene, backend)`, returns the recorded signals of the
-execution as a `Rollout`. Backends:
+execution as a `Rollout`. The backends live in a registry (`registry.py`: `pybullet`, `mujoco`,
+`kinematic`, `command`), each one class following `backend.Backend` and declaring its
+`Capabilities`.
 
-- `kinematic`: the reference itself is the signal (instant, for tests and quick studies);
-- `pybullet`: a simulated Franka Panda tracking the reference (see `stl_lfd.sim.panda`);
-- `command`: an external program executes it, e.g. on a real robot (see `stl_lfd.sim.command`),
-  after the safety gate (`stl_lfd.sim.safety`) has checked it against the scene's limits.
+    backend.py, registry.py        the protocol, its capabilities; backends found by name
+    recorder.py                    poses, fingers, wrench and objects -> the signal columns
+    scene.py, scene_file.py        scenes as data; reading scene files and placements
+    impedance.py                   the compliant controller both simulators use
+    pybullet_panda.py              a compliant Panda in PyBullet
+    mujoco_panda.py, mujoco_model.py   a compliant Panda in MuJoCo, and its model
+    kinematic.py, tracking.py      the reference itself; its execution as a robot would track it
+    command.py, safety.py, plausibility.py   an external executor, behind a safety gate
 
 This package reads no STL and no skill model: callers turn a model into a `Reference` and
-pass the regions to draw through `Scene.with_regions`.
+pass the regions to draw through `Scene.with_regions`. Names are loaded on first use, so that
+naming the backends (the command line's choices) loads no simulator.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-from typing import Callable, Protocol
+from typing import TYPE_CHECKING
 
-from stl_lfd.choices import BACKENDS, RECORDED_SIGNALS
-from stl_lfd.errors import ConfigError, ExecutionError
-from stl_lfd.sim.command import Command, CommandBackend, exchange_folder
-from stl_lfd.sim.kinematic import KinematicBackend
-from stl_lfd.sim.reference import (
-    SIMULATION_RATE,
-    TIME_STEP,
-    Reference,
-    Rollout,
-    TrackingWarning,
-    read_reference_csv,
-    warn_if_untracked,
-    write_reference_csv,
-)
-from stl_lfd.sim.safety import Safety, UnsafeReference, check_reference
-from stl_lfd.sim.scene import Scene, builtin_scenes, load_scene
+from stl_lfd.lazy import lazy_exports
 
-
-class Backend(Protocol):
-    """What every backend offers."""
-
-    name: str
-
-    def run(self, reference: Reference, scene: Scene, rate: float, observer: Callable | None = None) -> Rollout: ...
-
-    def close(self) -> None: ...
-
-    def __enter__(self) -> "Backend": ...
-
-    def __exit__(self, *exception: object) -> None: ...
-
+if TYPE_CHECKING:
+    from stl_lfd.sim.backend import Backend, Observer
+    from stl_lfd.sim.reference import Reference, Rollout
+    from stl_lfd.sim.scene import Scene
 
 DEFAULT_RATE = 100.0
 
-_backends: dict[str, Backend] = {}
+_HOMES = {
+    "RECORDED_SIGNALS": "stl_lfd.choices",
+    "Backend": "stl_lfd.sim.backend",
+    "BackendOptions": "stl_lfd.sim.backend",
+    "Capabilities": "stl_lfd.sim.backend",
+    "DEFAULT_BACKEND": "stl_lfd.sim.registry",
+    "backend_class": "stl_lfd.sim.registry",
+    "backend_names": "stl_lfd.sim.registry",
+    "get_backend": "stl_lfd.sim.registry",
+    "new_backend": "stl_lfd.sim.registry",
+    "register": "stl_lfd.sim.registry",
+    "Command": "stl_lfd.sim.command",
+    "CommandBackend": "stl_lfd.sim.command",
+    "exchange_folder": "stl_lfd.sim.command",
+    "SIMULATION_RATE": "stl_lfd.sim.reference",
+    "TIME_STEP": "stl_lfd.sim.reference",
+    "Reference": "stl_lfd.sim.reference",
+    "Rollout": "stl_lfd.sim.reference",
+    "TrackingWarning": "stl_lfd.sim.reference",
+    "read_reference_csv": "stl_lfd.sim.reference",
+    "write_reference_csv": "stl_lfd.sim.reference",
+    "Safety": "stl_lfd.sim.safety",
+    "UnsafeReference": "stl_lfd.sim.safety",
+    "check_reference": "stl_lfd.sim.safety",
+    "Scene": "stl_lfd.sim.scene",
+    "builtin_scenes": "stl_lfd.sim.scene_file",
+    "load_scene": "stl_lfd.sim.scene_file",
+}
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _HOMES, globals())
+__all__ += ["DEFAULT_RATE", "execute"]
 
 
-def new_backend(name: str, command: Command | None = None, folder: Path | None = None) -> Backend:
-    """A backend of the caller's own, to close when done; backends are context managers:
-
-    with new_backend("pybullet") as backend:
-        rollout = execute(reference, scene, backend)
-
-    The `command` backend needs its `command`, and writes its exchange folders in `folder` (a
-    run directory; default: temporary folders).
-    """
-    if name not in BACKENDS:
-        raise ExecutionError(f"unknown backend '{name}' (choose from {', '.join(BACKENDS)})")
-    if name == "command":
-        if command is None:
-            raise ConfigError("the command backend needs a command (--command, or 'command' in the task file)")
-        return CommandBackend(command, folder)
-    if name == "kinematic":
-        return KinematicBackend()
-    from stl_lfd.sim.panda import PyBulletBackend
-
-    return PyBulletBackend()
-
-
-def get_backend(name: str) -> Backend:
-    """The process-wide backend called `name`, for one-off executions (its worlds are built
-    once and kept until the process ends); code that runs many rollouts owns one with
-    `new_backend`."""
-    if name not in _backends:
-        _backends[name] = new_backend(name)
-    return _backends[name]
-
-
-def execute(
-    reference: Reference,
-    scene: Scene,
-    backend: str | Backend = "pybullet",
-    rate: float = DEFAULT_RATE,
-    observer: Callable | None = None,
-) -> Rollout:
+def execute(reference: "Reference", scene: "Scene", backend: "str | Backend" = "", rate: float = DEFAULT_RATE, observer: "Observer | None" = None) -> "Rollout":
     """Execute `reference` in `scene` and return the signals recorded at `rate` samples/s.
 
-    `backend` is a name of `BACKENDS` or a backend object (such as a GUI `PyBulletBackend`).
-
-    Warns (`TrackingWarning`) with the worst error when the robot could not follow the
-    reference by more than the scene's tracking tolerance.
+    `backend` is a registered name (default: `DEFAULT_BACKEND`) or a backend object (such as
+    one opened with a GUI). Warns (`TrackingWarning`) with the worst error when the robot could
+    not follow the reference by more than the scene's tracking tolerance.
     """
-    runner = get_backend(backend) if isinstance(backend, str) else backend
+    from stl_lfd.sim.reference import warn_if_untracked
+    from stl_lfd.sim.registry import DEFAULT_BACKEND, get_backend
+
+    runner = get_backend(backend or DEFAULT_BACKEND) if isinstance(backend, str) else backend
     rollout = runner.run(reference, scene, rate, observer)
     warn_if_untracked(rollout, reference, scene.tracking_tolerance)
     return rollout
-
-
-__all__ = [
-    "BACKENDS",
-    "RECORDED_SIGNALS",
-    "SIMULATION_RATE",
-    "TIME_STEP",
-    "Backend",
-    "Command",
-    "CommandBackend",
-    "DEFAULT_RATE",
-    "Reference",
-    "Rollout",
-    "Safety",
-    "Scene",
-    "TrackingWarning",
-    "UnsafeReference",
-    "builtin_scenes",
-    "check_reference",
-    "exchange_folder",
-    "execute",
-    "get_backend",
-    "new_backend",
-    "load_scene",
-    "read_reference_csv",
-    "write_reference_csv",
-]

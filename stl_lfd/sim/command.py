@@ -38,6 +38,7 @@ import numpy as np
 
 from stl_lfd.errors import ConfigError, ExecutionError
 from stl_lfd.signals import SignalTable, read_signal_csv
+from stl_lfd.sim.backend import BackendBase, BackendOptions, Capabilities
 from stl_lfd.sim.plausibility import check_recorded
 from stl_lfd.sim.reference import Reference, Rollout, write_reference_csv
 from stl_lfd.sim.safety import check_reference
@@ -124,7 +125,7 @@ def exchange_folder(run_dir: Path, trial: int) -> Path:
     return Path(run_dir) / EXECUTIONS_DIR / ("initial" if trial == 0 else f"trial-{trial:04d}")
 
 
-class CommandBackend:
+class CommandBackend(BackendBase):
     """Executes references by running a `Command`.
 
     Attributes:
@@ -134,11 +135,17 @@ class CommandBackend:
     """
 
     name = "command"
+    capabilities = Capabilities(measures_force=True, needs_command=True)
 
     def __init__(self, command: Command, folder: Path | None = None) -> None:
         self.command = command
         self.folder = folder
         self.trial = 0
+
+    @classmethod
+    def open(cls, options: BackendOptions) -> "CommandBackend":
+        assert options.command is not None  # new_backend checks it
+        return cls(options.command, options.folder)
 
     def run(self, reference: Reference, scene: Scene, rate: float, observer: Callable | None = None) -> Rollout:
         """Check `reference`, hand it to the command, and return the signals it recorded."""
@@ -174,15 +181,6 @@ class CommandBackend:
             yield folder
         finally:
             shutil.rmtree(folder, ignore_errors=True)
-
-    def close(self) -> None:
-        """Nothing to release: each execution's process has ended when `run` returns."""
-
-    def __enter__(self) -> "CommandBackend":
-        return self
-
-    def __exit__(self, *exception: object) -> None:
-        self.close()
 
 
 def gate(reference: Reference, scene: Scene) -> None:

@@ -9,50 +9,32 @@ tilts are recorded so); nothing falls.
 
 from __future__ import annotations
 
-from typing import Callable
-
 import numpy as np
 
 import stl_lfd.rotations as rotations
-from stl_lfd.rotations import QUATERNION_COLUMNS
 from stl_lfd.signals import SignalTable
+from stl_lfd.sim.backend import BackendBase, Capabilities, Observer
+from stl_lfd.sim.recorder import Steps, signal_columns
 from stl_lfd.sim.reference import Reference, Rollout, recording_times
 from stl_lfd.sim.scene import Scene
 
 
-class KinematicBackend:
-    name = "kinematic"
-    plays_the_plan = True  # what it records is the reference (subclasses that depart from it say not)
+class KinematicBackend(BackendBase):
+    """Records the reference itself (see the module's docstring)."""
 
-    def run(self, reference: Reference, scene: Scene, rate: float, observer: Callable | None = None) -> Rollout:
+    name = "kinematic"
+    capabilities = Capabilities(plays_the_plan=True)
+
+    def run(self, reference: Reference, scene: Scene, rate: float, observer: Observer | None = None) -> Rollout:
         """Sample `reference` at `rate`; `observer` is not called (there is no world to film)."""
         times = recording_times(reference.duration, rate)
         positions = reference.positions_at(times)
-        columns = {
-            "x": positions[:, 0],
-            "y": positions[:, 1],
-            "z": positions[:, 2],
-            "gripper": reference.gripper_at(times, scene.gripper_opening),
-            "force": np.zeros(times.size),
-        }
         orientations = reference.orientations_at(times)
-        columns.update(zip(QUATERNION_COLUMNS, orientations.T))
-        columns["tilt"] = rotations.tilt(orientations)
         frame_positions, frame_orientations = carried_frames(reference, scene, times, positions, orientations)
-        for index, frame in enumerate(scene.frames):
-            columns.update(zip(frame.signals, frame_positions[:, index].T))
-        for index, frame in enumerate(scene.frames):
-            columns[frame.tilt_signal] = rotations.uprightness(frame_orientations[:, index])
-        return Rollout(SignalTable(times, columns, source="kinematic rollout"), np.zeros(times.size))
-
-    def close(self) -> None:
-        pass
-
-    def __enter__(self) -> "KinematicBackend":
-        return self
-
-    def __exit__(self, *exception: object) -> None:
-        self.close()
+        steps = Steps(
+            times, positions, orientations, reference.gripper_at(times, scene.gripper_opening), np.zeros((times.size, 6)), frame_positions, frame_orientations
+        )
+        return Rollout(SignalTable(times, signal_columns(steps, scene, times), source="kinematic rollout"), np.zeros(times.size))
 
 
 def carried_frames(reference: Reference, scene: Scene, times: np.ndarray, positions: np.ndarray, orientations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

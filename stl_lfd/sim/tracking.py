@@ -27,6 +27,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from stl_lfd.signals import SignalTable
+from stl_lfd.sim.backend import Capabilities
 from stl_lfd.sim.kinematic import KinematicBackend
 from stl_lfd.sim.reference import Reference, Rollout, recording_times
 from stl_lfd.sim.scene import Scene
@@ -263,7 +264,7 @@ class PredictingBackend(KinematicBackend):
     gripper, grasps and releases follow the robot's clock (`model.clock_`), and carried objects
     move with the predicted hand."""
 
-    plays_the_plan = False
+    capabilities = Capabilities()  # a prediction of a robot, not the plan itself
 
     def __init__(self, model: TrackingModel) -> None:
         self.model = model

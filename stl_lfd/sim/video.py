@@ -1,4 +1,5 @@
-"""Headless videos of a rollout: TinyRenderer frames from the scene camera, written by imageio.
+"""Watching a rollout: headless videos from the scene camera (frames rendered by the backend's
+world, written by imageio), and real-time pacing for a GUI.
 
 `.mp4` is encoded with the ffmpeg binary that the `imageio-ffmpeg` wheel ships; `.gif` with
 Pillow. One frame is taken at t = 0 and then every 1/fps seconds of simulated time; each
@@ -7,13 +8,14 @@ frame shows its time (which also keeps GIF writers from merging frames that look
 
 from __future__ import annotations
 
+import time as clock
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
 from stl_lfd.errors import ExecutionError
-from stl_lfd.sim.panda import PandaWorld
+from stl_lfd.sim.backend import Observer
 from stl_lfd.sim.scene import Camera
 
 VIDEO_SUFFIXES = (".mp4", ".gif")
@@ -34,7 +36,7 @@ def stamp_time(image: np.ndarray, time: float) -> np.ndarray:
 
 
 class VideoRecorder:
-    """An observer for `PyBulletBackend.run` that films the world into `path`.
+    """An observer for a backend that films (`Capabilities.films`): it films the world into `path`.
 
     Args:
         path: `.mp4` or `.gif` file to write.
@@ -59,7 +61,7 @@ class VideoRecorder:
         except Exception as error:  # the writer plugins raise many kinds of errors
             raise ExecutionError(f"{path}: cannot write video ({error})") from None
 
-    def __call__(self, time: float, world: PandaWorld) -> None:
+    def __call__(self, time: float, world: Any) -> None:
         if time + 1e-9 < self.frames / self.camera.fps:
             return
         self.writer.append_data(stamp_time(world.render(self.camera), time))
@@ -69,3 +71,17 @@ class VideoRecorder:
 
     def close(self) -> None:
         self.writer.close()
+
+
+def pace_real_time() -> Observer:
+    """An observer that slows the simulation down to wall-clock time (for the GUI)."""
+    start: list[float] = []
+
+    def observe(time: float, world: Any) -> None:
+        if not start:
+            start.append(clock.perf_counter() - time)
+        delay = start[0] + time - clock.perf_counter()
+        if delay > 0:
+            clock.sleep(delay)
+
+    return observe

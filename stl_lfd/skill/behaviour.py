@@ -11,8 +11,8 @@ A skill learned with frames (a TP-HSMM) is retrieved for the poses of the scene'
 step's `frames: {MODEL_FRAME: SCENE_FRAME}` binds them, and frames it leaves out are bound to
 the scene frame of the same name.
 
-Grasping attaches the nearest movable object to the hand with a fixed constraint (see
-`stl_lfd.sim.panda.PandaWorld.grasp`); a grasp with nothing in reach fails the rollout.
+A grasp closes the fingers on the nearest movable object, which they hold by friction alone
+(see `stl_lfd.sim.world`); a grasp with nothing in reach fails the rollout.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from stl_lfd.hsmm.spread import MinimumSpread, parse_min_spread
 from stl_lfd.poses import Pose
 from stl_lfd.rotations import DOWN
 from stl_lfd.sim import TIME_STEP, Reference
-from stl_lfd.sim.scene import scene_reference
+from stl_lfd.sim.scene_file import scene_reference
 from stl_lfd.skill.execution import references_of
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 

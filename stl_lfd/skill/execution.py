@@ -64,7 +64,7 @@ def skill_poses(model: HSMM, poses: Mapping[str, Pose], name: str = "skill") -> 
 def rollout_model(
     model: HSMM,
     scene: Scene,
-    backend: str | Backend = "pybullet",
+    backend: str | Backend = "",
     duration: float | None = None,
     rate: float = DEFAULT_RATE,
     observer: Callable | None = None,

@@ -11,6 +11,7 @@ from typing import Callable, Mapping, Sequence
 from stl_lfd.hsmm import HSMM
 from stl_lfd.poses import Pose
 from stl_lfd.sim import DEFAULT_RATE, Backend, Reference, Rollout, Scene, execute, load_scene
+from stl_lfd.sim.scene_file import placement_from_options
 from stl_lfd.skill.behaviour import Behaviour, load_skill, references_for
 
 DEFAULT_SCENE = "free_space"
@@ -64,5 +65,5 @@ def placed_scene(scene: str | Scene, placement: Mapping[str, Pose] | Sequence[st
     -> pose, or `--place` texts `NAME=x,y[,z[,yaw]]` (parsed and checked against the scene)."""
     world = load_scene(scene) if not isinstance(scene, Scene) else scene
     if not isinstance(placement, Mapping):
-        placement = world.placement_from_options(list(placement))
+        placement = placement_from_options(world, list(placement))
     return world.place(placement, source) if placement else world

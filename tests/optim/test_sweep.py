@@ -124,7 +124,7 @@ def test_variants_change_task_keys_and_bad_sweeps_are_refused(tmp_path, learned_
         ("tasks: [nope.yaml]\n", "'tasks' names nope.yaml, which does not exist"),
         ("tasks: [small.yaml]\nmethods: [magic]\n", "'methods' must be a list of stl, plan, pi, logei, random"),
         ("tasks: [small.yaml]\nseeds: -1\n", "'seeds' must be at least 1"),
-        ("tasks: [small.yaml]\nbackend: mujoco\n", "'backend' must be one of"),
+        ("tasks: [small.yaml]\nbackend: gazebo\n", "'backend' must be one of"),
         ("tasks: [small.yaml]\ncolour: red\n", "unknown key 'colour'"),
         ("tasks: [small.yaml]\nvariants:\n  bad: {parameters: {means: {beta: -1}}}\n", "(variant bad of bad.yaml)"),
         ("tasks: [small.yaml, small.yaml]\n", "two cells are both called small-plan-seed0"),

@@ -13,6 +13,7 @@ from stl_lfd.errors import RunError
 from stl_lfd.optim import finish_run, load_task, resume_run, start_run
 from stl_lfd.optim.tracking import FOLLOWS_THE_PLAN, TRACKING_FILE, read_tracking, used
 from stl_lfd.signals import SignalTable
+from stl_lfd.sim.backend import Capabilities
 from stl_lfd.sim.kinematic import KinematicBackend
 from stl_lfd.sim.reference import Rollout
 from tests.optim.test_run import small_task
@@ -23,7 +24,7 @@ LAG, SAG = 0.25, 0.012  # s, m
 class SaggingRobot(KinematicBackend):
     """Follows the reference through a first-order lag and sits SAG below it."""
 
-    plays_the_plan = False
+    capabilities = Capabilities()
 
     def run(self, reference, scene, rate, observer=None):
         rollout = super().run(reference, scene, rate, observer)
@@ -38,7 +39,7 @@ class SaggingRobot(KinematicBackend):
 @pytest.fixture
 def sagging(monkeypatch):
     original = objective_module.new_backend
-    monkeypatch.setattr(objective_module, "new_backend", lambda name, command=None: SaggingRobot() if name == "kinematic" else original(name, command))
+    monkeypatch.setattr(objective_module, "new_backend", lambda name, options=None: SaggingRobot() if name == "kinematic" else original(name, options))
 
 
 def plan_task(tmp_path, learned_model_file, trials):

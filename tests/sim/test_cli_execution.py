@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from stl_lfd.choices import RECORDED_SIGNALS
 from stl_lfd.cli import app
 from stl_lfd.hsmm import save_model
 from stl_lfd.signals import read_signal_csv
@@ -18,7 +19,7 @@ PHI1 = str(ROOT / "specs" / "phi1.stl")
 def test_rollout_writes_csv_to_stdout_for_a_pipeline(learned_model_file):
     result = runner.invoke(app, ["rollout", str(learned_model_file), "--duration", "20", "--rate", "50"])
     assert result.exit_code == 0, result.stderr
-    assert result.stdout.startswith("t,x,y,z,gripper,force,qx,qy,qz,qw,tilt\n")
+    assert result.stdout.startswith("t,x,y,z,gripper,force,qx,qy,qz,qw,tilt,fx,fy,fz,tx,ty,tz\n")
     assert "x real time" in result.stderr and "tracking error RMS" in result.stderr
     piped = runner.invoke(app, ["robustness", PHI1, "-", "--semantics", "new"], input=result.stdout)
     assert piped.exit_code == 0, piped.stderr
@@ -33,7 +34,7 @@ def test_rollout_to_a_file(learned_model_file, tmp_path):
     assert result.stdout == ""
     assert "5.00 s of the reference played back (no dynamics)" in result.stderr and "real time" not in result.stderr
     table = read_signal_csv(output)
-    assert table.samples == 501 and set(table.columns) == {"x", "y", "z", "gripper", "force", "qx", "qy", "qz", "qw", "tilt"}
+    assert table.samples == 501 and set(table.columns) == set(RECORDED_SIGNALS)
     assert np.allclose(table.columns["qx"], 1.0) and np.allclose(table.columns["tilt"], 0.0)  # the hand points straight down
 
 
@@ -43,7 +44,7 @@ def test_rollout_to_a_file(learned_model_file, tmp_path):
         (["rollout", "missing.npz"], 6, "missing.npz"),
         (["rollout", "{model}", "--scene", "kitchen"], 5, "unknown scene 'kitchen'"),
         (["rollout", "{model}", "--rate", "0"], 6, "the rate must be a positive number"),
-        (["rollout", "{model}", "--backend", "mujoco"], 2, "mujoco"),
+        (["rollout", "{model}", "--backend", "gazebo"], 2, "gazebo"),
         (["replay", "missing.npz", "--video", "x.gif"], 5, "no such model file, behaviour file or run directory"),
         (["replay", "{model}", "--video", "x.avi"], 8, "must end in .mp4 or .gif"),
     ],

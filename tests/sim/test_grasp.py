@@ -1,4 +1,5 @@
-"""Grasp and release in the pick_insert scene, on a scripted reference (no skill model)."""
+"""Grasp and release in the pick_insert scene on both simulated Pandas, on a scripted reference
+(no skill model): the fingers hold the shaft by friction, the compliant arm yields to the holder."""
 
 import warnings
 
@@ -6,7 +7,7 @@ import numpy as np
 import pytest
 
 from stl_lfd.errors import ExecutionError
-from stl_lfd.sim import Reference, TrackingWarning, execute, get_backend, load_scene
+from stl_lfd.sim import Reference, TrackingWarning, execute, load_scene
 
 SCENE = load_scene("pick_insert")
 GRASP = np.array([0.45, -0.25, 0.11])
@@ -44,9 +45,7 @@ def pick_and_place(offset=(0.0, 0.0), grasp_at=GRASP):
     return Reference(times, minimum_jerk(times, waypoints), gripper, ((3.0, "grasp"), (11.0, "release")))
 
 
-def shaft_position():
-    world = get_backend("pybullet").world(SCENE)
-    return np.array(world.client.getBasePositionAndOrientation(world.objects["shaft"])[0])
+ENGINES = ["pybullet", "mujoco"]
 
 
 class ShaftTracker:
@@ -57,55 +56,60 @@ class ShaftTracker:
 
     def __call__(self, time, world):
         self.times.append(time)
-        self.shaft.append(world.client.getBasePositionAndOrientation(world.objects["shaft"])[0])
-        self.hand.append(world.end_effector())
+        self.shaft.append(world.object_poses()["shaft"][0])
+        self.hand.append(world.hand_pose()[0])
 
 
-@pytest.fixture(scope="module")
-def aligned():
+@pytest.fixture(scope="module", params=ENGINES)
+def aligned(request):
     tracker = ShaftTracker()
-    rollout = execute(pick_and_place(), SCENE, "pybullet", observer=tracker)
-    return rollout, tracker, shaft_position()
+    rollout = execute(pick_and_place(), SCENE, request.param, observer=tracker)
+    return rollout, tracker
 
 
 @pytest.mark.slow
 def test_the_grasped_shaft_travels_with_the_hand(aligned):
-    _, tracker, _ = aligned
+    _, tracker = aligned
     times, shaft, hand = np.array(tracker.times), np.array(tracker.shaft), np.array(tracker.hand)
     transport = (times > 4.0) & (times < 10.0)
     offsets = shaft[transport] - hand[transport]
-    assert np.ptp(offsets, axis=0).max() < 0.003  # rigidly held: the offset varies by under 3 mm
+    assert np.ptp(offsets, axis=0).max() < 0.003  # held by friction: the offset varies by under 3 mm
     assert np.linalg.norm(shaft[transport][-1] - shaft[transport][0]) > 0.4  # and it went a long way
 
 
 @pytest.mark.slow
 def test_release_leaves_the_shaft_standing_in_the_holder(aligned):
-    _, _, final = aligned
+    _, tracker = aligned
+    final = tracker.shaft[-1]
     assert np.allclose(final[:2], HOLE[:2], atol=0.006)
     assert final[2] == pytest.approx(0.08, abs=0.005)  # standing on the table inside the hole
 
 
 @pytest.mark.slow
-def test_force_is_zero_in_free_motion_and_small_when_aligned(aligned):
-    rollout, _, _ = aligned
+def test_the_wrist_feels_no_force_in_free_motion_nor_while_carrying(aligned):
+    rollout, _ = aligned
     force, times = rollout.signals.columns["force"], rollout.signals.times
-    assert np.all(force[times < 2.9] == 0.0)  # moving down to the shaft, touching nothing
-    assert np.all(force[(times > 5.5) & (times < 9.5)] < 1e-3)  # carrying it through the air (the filter decays)
-    assert force.max() < 3.0
+    assert force[times < 1.9].max() < 1.0  # moving down to the shaft, touching nothing
+    assert force[(times > 5.5) & (times < 9.5)].max() < 1.0  # carrying it: its weight is the declared load, not contact
+    assert force.max() < 5.0  # set down in the hole without pushing
 
 
 @pytest.mark.slow
-def test_a_misaligned_insertion_pushes_hard_on_the_holder():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_misaligned_insertion_pushes_on_the_holder_as_a_compliant_arm_does(engine):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TrackingWarning)  # blocked by the holder, as intended
-        rollout = execute(pick_and_place(offset=(0.012, 0.0)), SCENE, "pybullet")
+        rollout = execute(pick_and_place(offset=(0.012, 0.0)), SCENE, engine)
     force, times = rollout.signals.columns["force"], rollout.signals.times
-    assert force[(times > 9.0) & (times < 11.0)].max() > 50.0
+    pushing = force[(times > 9.0) & (times < 11.0)]
+    # the hand is sent 7.5 cm below the rim: a 400 N/m spring, not a position-controlled arm
+    assert 5.0 < pushing.max() < 60.0
 
 
-def test_a_grasp_with_nothing_in_reach_fails_the_rollout():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_grasp_with_nothing_in_reach_fails_the_rollout(engine):
     with pytest.raises(ExecutionError, match=r"grasp at t = 3.00 s: nothing within 30 mm of the hand"):
-        execute(pick_and_place(grasp_at=GRASP + [0.0, 0.1, 0.0]), SCENE, "pybullet")
+        execute(pick_and_place(grasp_at=GRASP + [0.0, 0.1, 0.0]), SCENE, engine)
 
 
 @pytest.mark.parametrize(

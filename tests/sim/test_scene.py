@@ -4,13 +4,16 @@ import pytest
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.sim import builtin_scenes, load_scene
+from stl_lfd.sim.scene_file import placement_from_options
 
 
 def test_free_space_is_built_in():
     assert "free_space" in builtin_scenes()
     scene = load_scene("free_space")
     assert scene.name == "free_space" and scene.objects == () and scene.regions == ()
-    assert 0 < scene.control.position_gain <= 1
+    control = scene.control
+    assert 200 <= control.translational_stiffness <= 1000 and 10 <= control.rotational_stiffness <= 30  # as the real robot's example controllers
+    assert control.torque_limits == (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0) and 0 < control.finger_force <= 70
 
 
 def test_regions_need_all_three_coordinates():
@@ -44,7 +47,14 @@ def test_a_user_scene_file_with_objects(tmp_path):
     [
         ("description: d\ncontrl: {}\n", "unknown key 'contrl'"),
         ("description: d\ncamera: {zoom: 2}\n", "unknown key 'camera.zoom'"),
-        ("description: d\ncontrol: {position_gain: 3}\n", r"'control.position_gain' must be in \(0, 1\]"),
+        (
+            "description: d\ncontrol: {position_gain: 0.3}\n",
+            r"'control.position_gain' belonged to the position-controlled arm; .* \(set translational_stiffness",
+        ),
+        ("description: d\ncontrol: {translational_stiffness: 1e9}\n", r"'control.translational_stiffness' must be at most 5000"),
+        ("description: d\ncontrol: {rotational_stiffness: -1}\n", r"'control.rotational_stiffness' must be positive"),
+        ("description: d\ncontrol: {finger_force: 500}\n", r"'control.finger_force' must be at most 140"),
+        ("description: d\ncontrol: {torque_limits: [87, 87, 87, 87, 12, 12, 100]}\n", r"'control.torque_limits' must be positive and at most the Panda's"),
         ("description: d\nobjects:\n  - {name: a, shape: cone, size: [1], position: [0, 0, 0]}\n", r"'objects\[0\].shape' must be one of"),
         ("description: d\nobjects:\n  - {name: a, shape: box, size: [1, 1], position: [0, 0, 0]}\n", r"'objects\[0\].size' must be a list of 3"),
         ("gripper_opening: 0.08\n", "missing key 'description'"),
@@ -81,12 +91,12 @@ def test_placing_a_frame_moves_its_objects_rigidly():
 def test_placements_outside_the_table_or_of_unknown_frames_are_refused():
     scene = load_scene("pick_insert")
     with pytest.raises(ConfigError, match=r"--place: holder at \(0.9, 0.2\) is outside the area it may be placed in \(x 0.3 to 0.7"):
-        scene.place(scene.placement_from_options(["holder=0.9,0.2"]))
+        scene.place(placement_from_options(scene, ["holder=0.9,0.2"]))
     with pytest.raises(ConfigError, match=r"--place cup=0.5,0.2: no frame 'cup' \(frames: shaft, holder\)"):
-        scene.placement_from_options(["cup=0.5,0.2"])
+        placement_from_options(scene, ["cup=0.5,0.2"])
     with pytest.raises(ConfigError, match="holder is placed twice"):
-        scene.placement_from_options(["holder=0.5,0.2", "holder=0.5,0.25"])
-    placement = scene.placement_from_options(["shaft=0.4,-0.3"])
+        placement_from_options(scene, ["holder=0.5,0.2", "holder=0.5,0.25"])
+    placement = placement_from_options(scene, ["shaft=0.4,-0.3"])
     assert placement["shaft"].position == (0.4, -0.3, 0.08) and placement["shaft"].yaw == 0.0
 
 

@@ -26,12 +26,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from stl_lfd.choices import BACKENDS
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_SEED
 from stl_lfd.optim.methods import method_names
 from stl_lfd.optim.runs.resume import inputs_record
 from stl_lfd.optim.task import Overrides, Task, parse_task
+from stl_lfd.sim.registry import backend_names
 from stl_lfd.yamlfile import check_keys, integer, read_yaml, shown
 
 MAX_CELLS = 10_000
@@ -74,8 +74,8 @@ def load_sweep(path: str | Path) -> Sweep:
     overrides = {key: integer(data[key], path, key, minimum=1) for key in ("trials", "initial") if key in data}
     if "backend" in data:
         overrides["backend"] = data["backend"]
-    if "backend" in overrides and overrides["backend"] not in BACKENDS:
-        raise ConfigError(f"{path}: 'backend' must be one of {', '.join(BACKENDS)} (got {shown(overrides['backend'])})")
+    if "backend" in overrides and overrides["backend"] not in backend_names():
+        raise ConfigError(f"{path}: 'backend' must be one of {', '.join(backend_names())} (got {shown(overrides['backend'])})")
     count = len(task_files) * len(variants) * max(len(methods), 1) * len(seeds)
     if count > MAX_CELLS:
         raise ConfigError(f"{path}: {count} cells is above the limit of {MAX_CELLS}")

@@ -1,0 +1,173 @@
+"""Where the shaft ends on the contact tasks (phi3, phi3_reorient, phi3_reorient_one): an
+independent physical check of every trial of short optimisation runs, the unoptimised trial
+included, read from the run directory's recorded signals.
+
+    python -m benchmarks.bench_contact [--tasks phi3,phi3_reorient,phi3_reorient_one]
+        [--seeds 0-9] [--methods plan,random] [--trials 16] [--backend pybullet] [--jobs 1]
+        [--robot LABEL] [--out benchmarks/results/contact.jsonl]
+
+Each trial's shaft ends
+  THROWN    more than 15 cm (in x-y) from both the hole's centre and where the shaft started,
+            or off the table (its centre below the table's top less 5 mm, or outside its x-y);
+  INSERTED  in the hole: its bottom below the holder's top, its centre within the clearance
+            (6 mm) of the hole's axis and upright within 3 degrees (bench_reorient.inserted);
+  OTHER     anywhere else (on the table, on the holder, still in the hand).
+A trial that failed (no signals) is counted apart. Satisfied: robustness > 0 as the run
+recorded it. One JSON line per run (task, method, seed) is appended to --out, with the commit.
+About 1-2 s per rollout on one core: 17 rollouts a run, 60 runs by default.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import tempfile
+import time
+import warnings
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "benchmarks" / "results" / "contact.jsonl"
+TASKS = ("phi3", "phi3_reorient", "phi3_reorient_one")
+# The scenes' table: a box centred at (0.5, 0, 0.01) with half extents (0.25, 0.45, 0.01).
+TABLE_TOP, TABLE_X, TABLE_Y = 0.02, (0.25, 0.75), (-0.45, 0.45)
+THROW_DISTANCE, BELOW_TOP = 0.15, 0.005
+CLASSES = ("thrown", "inserted", "other", "failed")
+
+
+def seed_list(text: str) -> list[int]:
+    """`0-9`, `3`, or `0-4,7` as a list of seeds."""
+    seeds = []
+    for part in text.split(","):
+        first, _, last = part.partition("-")
+        seeds.extend(range(int(first), int(last or first) + 1))
+    return seeds
+
+
+def holder_pose(task: Any) -> Any:
+    """The holder frame's pose in `task` (its placement, else the scene's)."""
+    from stl_lfd.sim.scene import load_scene
+
+    placed = task.placements[0] if task.placements else {}
+    return placed.get("holder") or load_scene(task.scene).frame_poses["holder"]
+
+
+def shaft_end(signals: Any, holder: Any) -> str:
+    """`thrown`, `inserted` or `other`: where the shaft ends (`holder`: the hole frame's pose,
+    whose yaw the recorded signals do not carry)."""
+    from benchmarks.bench_reorient import inserted
+    from stl_lfd.poses import Pose
+
+    columns = signals.columns
+    x, y, z = (float(columns[f"shaft_{axis}"][-1]) for axis in "xyz")
+    hole = np.array([columns["holder_x"][-1], columns["holder_y"][-1]])
+    start = np.array([columns["shaft_x"][0], columns["shaft_y"][0]])
+    far = min(np.hypot(*(np.array([x, y]) - hole)), np.hypot(*(np.array([x, y]) - start))) > THROW_DISTANCE
+    off_table = z < TABLE_TOP - BELOW_TOP or not (TABLE_X[0] <= x <= TABLE_X[1] and TABLE_Y[0] <= y <= TABLE_Y[1])
+    if far or off_table:
+        return "thrown"
+    hole_frame = Pose((float(hole[0]), float(hole[1]), float(columns["holder_z"][-1])), holder.yaw, holder.quaternion)
+    return "inserted" if inserted(signals, hole_frame)[0] else "other"
+
+
+def one_run(job: tuple[str, str, int, int, str]) -> dict[str, Any]:
+    """Optimise `task` with `method` and `seed` for `trials` trials on `backend`, and classify
+    the end of every trial (the unoptimised one first)."""
+    task_name, method, seed, trials, backend = job
+    warnings.simplefilter("ignore")
+    from stl_lfd.optim import RunDirectory, finish_run, load_task, start_run
+
+    task = load_task(ROOT / "configs" / f"{task_name}.yaml").with_overrides(seed=seed, method=method, trials=trials, backend=backend)
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory() as folder:
+        summary = finish_run(start_run(task, Path(folder) / "run"))
+        run = RunDirectory(Path(folder) / "run")
+        holder = holder_pose(task)
+        robustness = [summary.initial_robustness] + [trial.robustness for trial in run.trials()]
+        ends = []
+        for number in range(len(robustness)):
+            signals = run.recorded_signals(number)
+            ends.append("failed" if signals is None else shaft_end(signals, holder))
+    satisfied = [value is not None and value > 0 for value in robustness]
+    counts = Counter(ends)
+    return {
+        "task": task_name,
+        "method": method,
+        "seed": seed,
+        "trials": len(ends),
+        **{name: counts[name] for name in CLASSES},
+        "satisfied": sum(satisfied),
+        "satisfied_inserted": sum(ok and end == "inserted" for ok, end in zip(satisfied, ends)),
+        "ends": "".join(end[0].upper() for end in ends),  # per trial from the unoptimised one: T, I, O, F
+        "wall_seconds": round(time.perf_counter() - start, 1),
+    }
+
+
+def commit() -> str:
+    try:
+        return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def print_totals(results: list[dict[str, Any]], title: str) -> None:
+    """Per task and method, summed over seeds."""
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=title, title_justify="left")
+    for column in ("task", "method", "seeds", "trials", "thrown", "inserted", "other", "failed", "satisfied", "satisfied & inserted", "time"):
+        table.add_column(column, justify="left" if column in ("task", "method") else "right")
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for result in results:
+        groups.setdefault((result["task"], result["method"]), []).append(result)
+    for (task_name, method), runs in groups.items():
+        total = {key: sum(run[key] for run in runs) for key in ("trials", *CLASSES, "satisfied", "satisfied_inserted", "wall_seconds")}
+        counts = [str(total[key]) for key in ("trials", *CLASSES, "satisfied", "satisfied_inserted")]
+        table.add_row(task_name, method, str(len(runs)), *counts, f"{total['wall_seconds'] / 60:.1f} min")
+    Console(width=150).print(table)
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--tasks", default=",".join(TASKS))
+    parser.add_argument("--seeds", default="0-9", help="e.g. 0-9, 3 or 0-4,7")
+    parser.add_argument("--methods", default="plan,random")
+    parser.add_argument("--trials", type=int, default=16, help="optimised trials per run (the unoptimised one comes on top)")
+    parser.add_argument("--backend", default="pybullet")
+    parser.add_argument("--jobs", type=int, default=1, help="runs side by side (spawned processes)")
+    parser.add_argument("--robot", default=None, help="a label of the robot and its control, recorded with each line (default: the backend)")
+    parser.add_argument("--out", type=Path, default=RESULTS, help="the JSON-lines file the results are appended to")
+    args = parser.parse_args(argv)
+    jobs = [
+        (task, method, seed, args.trials, args.backend)
+        for task in args.tasks.split(",")
+        for method in args.methods.split(",")
+        for seed in seed_list(args.seeds)
+    ]
+    if args.jobs > 1:
+        from stl_lfd.optim.runs.sweep import local_map
+
+        finished = (result for _, result in local_map(one_run, jobs, args.jobs))
+    else:
+        finished = (one_run(job) for job in jobs)
+    stamp = {"commit": commit(), "backend": args.backend, "robot": args.robot or args.backend}
+    results, start = [], time.perf_counter()
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    for result in finished:
+        line = stamp | result
+        results.append(line)
+        with open(args.out, "a") as stream:
+            stream.write(json.dumps(line) + "\n")
+        print(f"{line['task']} {line['method']} seed {line['seed']}: {line['ends']} ({line['wall_seconds']:.0f} s)", flush=True)
+    results.sort(key=lambda line: jobs.index((line["task"], line["method"], line["seed"], args.trials, args.backend)))
+    print_totals(results, f"Where the shaft ends ({stamp['robot']}, {args.trials} trials + the unoptimised one, {time.perf_counter() - start:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,238 @@
+"""Scene files and placements as users write them: a scene YAML file (or a built-in scene's
+name) read into a `Scene`, and `--place NAME=x,y[,z[,yaw]]` options or a task file's `place:`
+mapping read into frame poses.
+
+Built-in scenes are YAML files in `stl_lfd/sim/scenes/`. A scene file has the keys of `Scene`
+(all optional except `description`); unknown keys are errors that name the key and the file.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from stl_lfd.errors import ConfigError
+from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment, parse_pose, pose_from_values
+from stl_lfd.sim.impedance import PANDA_TORQUE_LIMITS
+from stl_lfd.sim.safety import Safety
+from stl_lfd.sim.scene import SHAPES, Camera, Control, Scene, SceneFrame, SceneObject, check_area
+from stl_lfd.yamlfile import check_keys, number, read_yaml, shown, vector
+
+
+def placement_from_options(scene: Scene, texts: list[str], option: str = "--place") -> dict[str, Pose]:
+    """Frame name -> pose from `NAME=x,y[,z[,yaw]]` texts (z and yaw default to the frame's)."""
+    placement: dict[str, Pose] = {}
+    for text in texts:
+        name, pose = parse_assignment(text, option, scene.frame_poses)
+        if name in placement:
+            raise ConfigError(f"{option} {text}: {name} is placed twice")
+        placement[name] = pose
+    scene.check_placement(placement, option)
+    return placement
+
+
+def placement_from_yaml(scene: Scene, data: Any, path: Path | str, where: str) -> dict[str, Pose]:
+    """Frame name -> pose from a mapping of `NAME: [x, y(, z(, yaw))]` or `NAME: {position:
+    [x, y, z], yaw: RAD}` (z and yaw default to the frame's), checked against the scene."""
+    if not isinstance(data, dict) or not data:
+        raise ConfigError(f"{path}: '{where}' must map frames of the scene {scene.name} to poses (its frames: {', '.join(scene.frame_poses) or 'none'})")
+    placement = {}
+    for name, value in data.items():
+        if name not in scene.frame_poses:
+            raise ConfigError(
+                f"{path}: '{where}' names {shown(name)}, which is not a frame of the scene {scene.name} (its frames: {', '.join(scene.frame_poses) or 'none'})"
+            )
+        if isinstance(value, list) and 2 <= len(value) <= 4:
+            placement[name] = pose_from_values(list(vector(value, len(value), path, f"{where}.{name}")), scene.frame_poses[name])
+        elif isinstance(value, dict):
+            placement[name] = parse_pose(value, path, f"{where}.{name}")
+        else:
+            raise ConfigError(f"{path}: '{where}.{name}' must be [x, y], [x, y, z], [x, y, z, yaw] or {{position: [x, y, z], yaw: RAD}} (got {shown(value)})")
+    scene.check_placement(placement, f"{path}: '{where}'")
+    return placement
+
+
+def builtin_scenes() -> list[str]:
+    """Names of the scenes that ship with the package."""
+    folder = resources.files("stl_lfd.sim") / "scenes"
+    return sorted(entry.name[: -len(".yaml")] for entry in folder.iterdir() if entry.name.endswith(".yaml"))
+
+
+def scene_reference(text: str, source: Path, kind: str) -> str:
+    """A scene as the `kind` file `source` (a task or behaviour file) names it: a built-in
+    scene's name as it is, or a scene file's absolute path, `text` read relative to `source`'s
+    folder (older versions read it from the working directory, which is still accepted when
+    only that exists). ConfigError naming `source` when the file does not exist."""
+    if not (text.endswith((".yaml", ".yml")) or "/" in text):
+        return text
+    resolved = Path(text) if Path(text).is_absolute() else source.parent / text
+    if not resolved.exists() and Path(text).exists():
+        resolved = Path(text)
+    if not resolved.exists():
+        raise ConfigError(f"{source}: 'scene' names {text}, which does not exist (paths are relative to the {kind} file)")
+    return str(resolved.resolve())
+
+
+def load_scene(name_or_path: str | Path) -> Scene:
+    """A built-in scene by name (`free_space`, ...) or a scene YAML file by path."""
+    text = str(name_or_path)
+    if text in builtin_scenes():
+        path = Path(str(resources.files("stl_lfd.sim") / "scenes" / f"{text}.yaml"))
+        source = text
+    elif text.endswith((".yaml", ".yml")) or Path(text).is_file():
+        path = Path(text)
+        if not path.is_file():
+            raise ConfigError(f"{path}: scene file not found")
+        source = str(path.resolve())
+    else:
+        raise ConfigError(f"unknown scene '{text}' (built-in: {', '.join(builtin_scenes())}; or the path of a scene .yaml file)")
+    return replace(parse_scene(read_yaml(path), path), source=source)
+
+
+def parse_scene(data: dict[str, Any], path: Path) -> Scene:
+    """Validate the mapping read from a scene file."""
+    keys = ("description", "gripper_opening", "control", "force_filter_hz", "tracking_tolerance", "grasp_distance", "camera", "objects", "frames", "safety")
+    check_keys(data, keys, path, required=("description",))
+    scene = Scene(name=path.stem, description=str(data["description"]))
+    if "gripper_opening" in data:
+        scene = replace(scene, gripper_opening=number(data["gripper_opening"], path, "gripper_opening", minimum=0.0))
+    if "force_filter_hz" in data:
+        scene = replace(scene, force_filter_hz=number(data["force_filter_hz"], path, "force_filter_hz", positive=True))
+    for key in ("tracking_tolerance", "grasp_distance"):
+        if key in data:
+            scene = replace(scene, **{key: number(data[key], path, key, positive=True)})
+    if "control" in data:
+        scene = replace(scene, control=_parse_control(data["control"], path))
+    if "camera" in data:
+        scene = replace(scene, camera=_parse_camera(data["camera"], path))
+    if "safety" in data:
+        scene = replace(scene, safety=_parse_safety(data["safety"], path))
+    objects = data.get("objects") or []
+    if not isinstance(objects, list):
+        raise ConfigError(f"{path}: 'objects' must be a list")
+    scene = replace(scene, objects=tuple(_parse_object(item, path, index) for index, item in enumerate(objects)))
+    frames = data.get("frames") or {}
+    if not isinstance(frames, dict):
+        raise ConfigError(f"{path}: 'frames' must map each frame's name to its pose and objects")
+    return replace(scene, frames=tuple(_parse_frame(name, item, path, scene) for name, item in frames.items()))
+
+
+def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
+    where = f"frames.{name}"
+    if not isinstance(name, str) or not name.isidentifier() or name == BASE_FRAME:
+        raise ConfigError(f"{path}: frame name {shown(name)} must be a name (letters, digits, _) other than '{BASE_FRAME}'")
+    check_keys(data, ("position", "yaw", "objects", "area", "symmetry"), path, where, required=("position", "objects"))
+    pose = parse_pose({key: data[key] for key in ("position", "yaw") if key in data}, path, where)
+    objects = data["objects"]
+    known = [item.name for item in scene.objects]
+    if not isinstance(objects, list) or not objects or not all(item in known for item in objects):
+        raise ConfigError(f"{path}: '{where}.objects' must list objects of the scene (got {shown(objects)}; known: {', '.join(known)})")
+    area = None
+    if "area" in data:
+        box = check_keys(data["area"], ("lower", "upper"), path, f"{where}.area", required=("lower", "upper"))
+        lower, upper = (vector(box[key], 2, path, f"{where}.area.{key}") for key in ("lower", "upper"))
+        if not all(low < high for low, high in zip(lower, upper)):
+            raise ConfigError(f"{path}: '{where}.area' must have lower < upper in x and y")
+        area = (lower, upper)
+    symmetry = data.get("symmetry", 1)
+    if isinstance(symmetry, bool) or not isinstance(symmetry, int) or symmetry < 1:
+        raise ConfigError(
+            f"{path}: '{where}.symmetry' must be a whole number of yaws that give the same objects (1: none, 2: a half turn, 4: a quarter turn; got {shown(symmetry)})"
+        )
+    frame = SceneFrame(name, pose, tuple(str(item) for item in objects), area, symmetry, pose.yaw)  # type: ignore[arg-type]
+    check_area(frame, pose, str(path))
+    return frame
+
+
+# Each control setting's largest sensible value: stiffer than this, the simulated arm needs a
+# finer time step than the backends take; the torque limits and finger force are the real
+# robot's (the Franka Hand's peak grasp force is 140 N).
+CONTROL_MAXIMA = {
+    "translational_stiffness": 5000.0,
+    "rotational_stiffness": 300.0,
+    "damping_ratio": 5.0,
+    "nullspace_stiffness": 100.0,
+    "finger_force": 140.0,
+}
+CONTROL_KEYS = (*CONTROL_MAXIMA, "torque_limits")
+# Keys of the position-controlled arm that impedance control replaced, and what replaces them.
+RETIRED_CONTROL_KEYS = {"position_gain": "translational_stiffness and rotational_stiffness", "arm_forces": "torque_limits"}
+
+
+def _parse_control(data: Any, path: Path) -> Control:
+    for key, instead in RETIRED_CONTROL_KEYS.items():
+        if isinstance(data, dict) and key in data:
+            raise ConfigError(f"{path}: 'control.{key}' belonged to the position-controlled arm; the arm is impedance-controlled now (set {instead})")
+    check_keys(data, CONTROL_KEYS, path, "control")
+    values: dict[str, Any] = {}
+    for key, largest in CONTROL_MAXIMA.items():
+        if key in data:
+            values[key] = number(data[key], path, f"control.{key}", positive=key != "nullspace_stiffness", minimum=0.0)
+            if values[key] > largest:
+                raise ConfigError(f"{path}: 'control.{key}' must be at most {largest:g} (got {values[key]:g})")
+    if "torque_limits" in data:
+        limits = vector(data["torque_limits"], 7, path, "control.torque_limits")
+        if not all(0 < limit <= real for limit, real in zip(limits, PANDA_TORQUE_LIMITS)):
+            raise ConfigError(
+                f"{path}: 'control.torque_limits' must be positive and at most the Panda's ({', '.join(f'{limit:g}' for limit in PANDA_TORQUE_LIMITS)} Nm)"
+            )
+        values["torque_limits"] = limits
+    return Control(**values)
+
+
+def _parse_camera(data: Any, path: Path) -> Camera:
+    check_keys(data, ("target", "distance", "yaw", "pitch", "width", "height", "fps"), path, "camera")
+    values: dict[str, Any] = {}
+    if "target" in data:
+        values["target"] = vector(data["target"], 3, path, "camera.target")
+    for key in ("distance", "fps"):
+        if key in data:
+            values[key] = number(data[key], path, f"camera.{key}", positive=True)
+    for key in ("yaw", "pitch"):
+        if key in data:
+            values[key] = number(data[key], path, f"camera.{key}")
+    for key in ("width", "height"):
+        if key in data:
+            values[key] = int(number(data[key], path, f"camera.{key}", minimum=16))
+    return Camera(**values)
+
+
+def _parse_safety(data: Any, path: Path) -> Safety:
+    check_keys(data, ("workspace", "max_speed", "max_angular_speed", "max_force"), path, "safety", required=("workspace", "max_speed"))
+    box = check_keys(data["workspace"], ("lower", "upper"), path, "safety.workspace", required=("lower", "upper"))
+    lower, upper = (vector(box[key], 3, path, f"safety.workspace.{key}") for key in ("lower", "upper"))
+    try:
+        angular = number(data["max_angular_speed"], path, "safety.max_angular_speed", positive=True) if "max_angular_speed" in data else None
+        force = number(data["max_force"], path, "safety.max_force", positive=True) if "max_force" in data else None
+        return Safety(lower, upper, number(data["max_speed"], path, "safety.max_speed", positive=True), angular, force)
+    except ValueError as error:
+        raise ConfigError(f"{path}: 'safety': {error}") from None
+
+
+def _parse_object(data: Any, path: Path, index: int) -> SceneObject:
+    where = f"objects[{index}]"
+    keys = ("name", "shape", "size", "position", "orientation", "mass", "color", "friction")
+    check_keys(data, keys, path, where, required=("name", "shape", "size", "position"))
+    shape = data["shape"]
+    if shape not in SHAPES:
+        raise ConfigError(f"{path}: '{where}.shape' must be one of {', '.join(SHAPES)} (got {shown(shape)})")
+    size_length = {"box": 3, "cylinder": 2, "sphere": 1}[shape]
+    values: dict[str, Any] = {
+        "name": str(data["name"]),
+        "shape": shape,
+        "size": vector(data["size"], size_length, path, f"{where}.size"),
+        "position": vector(data["position"], 3, path, f"{where}.position"),
+    }
+    if any(value <= 0 for value in values["size"]):
+        raise ConfigError(f"{path}: '{where}.size' must be positive")
+    if "orientation" in data:
+        values["orientation"] = vector(data["orientation"], 3, path, f"{where}.orientation")
+    if "mass" in data:
+        values["mass"] = number(data["mass"], path, f"{where}.mass", minimum=0.0)
+    if "color" in data:
+        values["color"] = vector(data["color"], 4, path, f"{where}.color")
+    if "friction" in data:
+        values["friction"] = number(data["friction"], path, f"{where}.friction", minimum=0.0)
+    return SceneObject(**values)
