@@ -51,7 +51,7 @@ def seed_list(text: str) -> list[int]:
 
 def holder_pose(task: Any) -> Any:
     """The holder frame's pose in `task` (its placement, else the scene's)."""
-    from stl_lfd.sim.scene import load_scene
+    from stl_lfd.sim import load_scene
 
     placed = task.placements[0] if task.placements else {}
     return placed.get("holder") or load_scene(task.scene).frame_poses["holder"]

@@ -4,7 +4,7 @@ pick_reorient_insert.yaml), executed on the simulated Panda at 20 object placeme
 saw, drawn by a seeded generator: the shaft and the holder inside the demonstrations' x-y range
 or up to 3 cm beyond it, each turned by any yaw.
 
-    python -m benchmarks.bench_reorient [--placements 20] [--seed 20261204]
+    python -m benchmarks.bench_reorient [--placements 20] [--seed 20261204] [--backend mujoco]
 
 A placement succeeds when the shaft ends in the hole: its bottom below the holder's top, its
 centre within the hole's clearance (6 mm) of the hole's axis in x and y, and upright within 3
@@ -64,6 +64,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--placements", type=int, default=20)
     parser.add_argument("--seed", type=int, default=20261204, help="the placements' generator seed")
     parser.add_argument("--demonstrated-yaws", action="store_true", help="turn the objects only within the demonstrations' yaws")
+    parser.add_argument("--backend", default="pybullet", help="the simulator")
     arguments = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     skill = PlacedSkill.load(BEHAVIOUR, duration=36.0)
@@ -71,7 +72,7 @@ def main(argv: list[str] | None = None) -> None:
     for index, placement in enumerate(placements(arguments.placements, arguments.seed, any_yaw=not arguments.demonstrated_yaws), start=1):
         try:
             placed = PlacedSkill(skill.models, skill.behaviour, placed_scene(skill.scene, placement), 36.0)
-            ok, how = inserted(placed.execute("pybullet", 100).signals, placement["holder"])
+            ok, how = inserted(placed.execute(arguments.backend, 100).signals, placement["holder"])
         except Exception as error:  # a failed grasp, say: the placement fails
             ok, how = False, str(error)[:60]
         successes += ok
@@ -79,7 +80,7 @@ def main(argv: list[str] | None = None) -> None:
     seconds = (time.perf_counter() - start) / arguments.placements
     print("\n".join(notes))
     print_table(
-        "Pick, re-orient and insert, unoptimised (PyBullet)",
+        f"Pick, re-orient and insert, unoptimised ({arguments.backend})",
         [
             Row(
                 "shaft in the hole",
