@@ -93,15 +93,11 @@ def test_the_unoptimised_behaviour_picks_then_pushes_the_shaft_onto_the_holder(p
     reference = behaviour_reference(behaviour, pick_insert_models, scene.gripper_opening, 48, scene.frame_poses)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TrackingWarning)
-        runs = [execute(reference, scene, engine).signals for _ in range(2)]
-    force, times = runs[0].columns["force"], runs[0].times
+        signals = execute(reference, scene, engine).signals  # (that it repeats exactly: tests/sim/test_mujoco.py)
+    force, times = signals.columns["force"], signals.times
     grasp_time = reference.events[0][0]
     assert force[times < grasp_time - 0.5].max() < 1.0  # reaching for the shaft touches nothing
     assert 5.0 < force.max() < 60.0  # the shifted insertion hits the holder's edge, as a compliant arm does
-    # consecutive rollouts with contacts and a grasp give identical signals
-    for other in runs[1:]:
-        for name in runs[0].columns:
-            assert np.array_equal(runs[0].columns[name], other.columns[name]), name
 
 
 def test_a_skill_from_one_demonstration_learned_in_its_object_frame(tmp_path):

@@ -32,7 +32,10 @@ def test_the_behaviour_inserts_the_upright_shaft_unless_demonstrated_off_the_hol
     signals = skill.execute("pybullet", 100).signals
     assert (SPEC.robustness(signals.columns, signals.times, semantics="classic") > 0) == satisfied
     end = {name: values[-1] for name, values in signals.columns.items()}
-    assert end["shaft_z"] < 0.12 and np.degrees(end["shaft_tilt"]) < (3 if satisfied else 10)  # in the hole either way, upright or not quite
+    if satisfied:
+        assert end["shaft_z"] < 0.1 and np.degrees(end["shaft_tilt"]) < 3  # upright in the hole
+    else:  # held 6 mm off and turned 84 degrees, the shaft catches the holder's edge and is left leaning on it
+        assert np.degrees(end["shaft_tilt"]) > 10
 
 
 def test_the_kinematic_backend_carries_the_grasped_shaft_so_plans_see_it_turn():

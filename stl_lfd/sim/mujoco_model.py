@@ -42,7 +42,8 @@ FINGER_GAIN = 5000.0  # N/m: the servo saturates at the finger force within a fe
 FINGER_MASS = 0.1  # kg (URDF), for a critically damped finger servo
 CONTACT_REFERENCE = (0.005, 1.0)  # solref: time constant (s), damping ratio
 CONTACT_IMPEDANCE = (0.95, 0.99, 0.001, 0.5, 2.0)  # solimp
-FRICTION_EXTRA = (0.005, 0.0001)  # torsional (m) and rolling (m) friction with condim 6
+TORSIONAL_FRICTION = 0.005  # m, with condim 6: a held shaft does not pivot about the fingers' axis
+ROLLING_FRICTION = 0.0001  # m, the robot's and the floor's (objects have their own)
 PAD_HALF_SIZE = (0.0087, 0.0021, 0.009)  # m: a pad on each fingertip's inner face (finger frame)
 
 
@@ -89,9 +90,9 @@ def build_model(scene: Scene) -> Any:
     return spec.compile()
 
 
-def _contact(geom: Any, friction: float) -> None:
+def _contact(geom: Any, friction: float, rolling: float = ROLLING_FRICTION) -> None:
     geom.condim = 6
-    geom.friction = [friction, *FRICTION_EXTRA]
+    geom.friction = [friction, TORSIONAL_FRICTION, rolling]
     geom.solref = list(CONTACT_REFERENCE)
     geom.solimp = list(CONTACT_IMPEDANCE)
 
@@ -146,7 +147,7 @@ def _add_object(spec: Any, item: SceneObject) -> None:
         geom.type, geom.size = mujoco.mjtGeom.mjGEOM_CYLINDER, [item.size[0], item.size[1] / 2.0, 0.0]  # MuJoCo: half height
     else:
         geom.type, geom.size = mujoco.mjtGeom.mjGEOM_SPHERE, [item.size[0], 0.0, 0.0]
-    _contact(geom, item.friction)
+    _contact(geom, item.friction, item.rolling_friction)
     if item.mass > 0:
         geom.mass = item.mass
 

@@ -161,7 +161,7 @@ class PandaWorld:
             basePosition=item.position,
             baseOrientation=client.getQuaternionFromEuler(item.orientation),
         )
-        client.changeDynamics(body, -1, lateralFriction=item.friction)
+        client.changeDynamics(body, -1, lateralFriction=item.friction, rollingFriction=item.rolling_friction)
         return body
 
     def frame_poses(self) -> tuple[np.ndarray, np.ndarray]:

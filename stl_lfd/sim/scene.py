@@ -20,6 +20,8 @@ from stl_lfd.sim.impedance import PANDA_TORQUE_LIMITS, Impedance
 from stl_lfd.sim.safety import Safety
 
 SHAPES = ("box", "cylinder", "sphere")
+# m: rolling resistance of an object by default, about that of a metal shaft on a wooden table
+ROLLING_FRICTION = 0.001
 REGION_COLORS = ((0.2, 0.5, 0.9, 0.3), (0.9, 0.5, 0.2, 0.3), (0.3, 0.8, 0.3, 0.3), (0.8, 0.3, 0.7, 0.3))
 
 
@@ -68,7 +70,9 @@ class SceneObject:
     """A rigid body of the scene.
 
     `size` holds half extents (x, y, z) for a box, (radius, height) for a cylinder and (radius,)
-    for a sphere. A mass of 0 makes the object fixed to the world.
+    for a sphere. A mass of 0 makes the object fixed to the world. `friction` is the sliding
+    friction coefficient; `rolling_friction` (m) the rolling resistance, the lever arm of the
+    torque that opposes rolling (a dropped shaft comes to rest instead of rolling on forever).
     """
 
     name: str
@@ -79,6 +83,7 @@ class SceneObject:
     mass: float = 0.0
     color: tuple[float, float, float, float] = (0.6, 0.6, 0.6, 1.0)
     friction: float = 1.0
+    rolling_friction: float = ROLLING_FRICTION
 
     def distance(self, point: np.ndarray, position=None, orientation=None) -> float:
         """Distance (m) from a base-frame `point` to the object's surface (0 inside), the object

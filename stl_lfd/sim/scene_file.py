@@ -213,7 +213,7 @@ def _parse_safety(data: Any, path: Path) -> Safety:
 
 def _parse_object(data: Any, path: Path, index: int) -> SceneObject:
     where = f"objects[{index}]"
-    keys = ("name", "shape", "size", "position", "orientation", "mass", "color", "friction")
+    keys = ("name", "shape", "size", "position", "orientation", "mass", "color", "friction", "rolling_friction")
     check_keys(data, keys, path, where, required=("name", "shape", "size", "position"))
     shape = data["shape"]
     if shape not in SHAPES:
@@ -233,6 +233,7 @@ def _parse_object(data: Any, path: Path, index: int) -> SceneObject:
         values["mass"] = number(data["mass"], path, f"{where}.mass", minimum=0.0)
     if "color" in data:
         values["color"] = vector(data["color"], 4, path, f"{where}.color")
-    if "friction" in data:
-        values["friction"] = number(data["friction"], path, f"{where}.friction", minimum=0.0)
+    for key in ("friction", "rolling_friction"):
+        if key in data:
+            values[key] = number(data[key], path, f"{where}.{key}", minimum=0.0)
     return SceneObject(**values)
