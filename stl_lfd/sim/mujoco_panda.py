@@ -26,7 +26,7 @@ from stl_lfd.sim.impedance import REST_POSTURE, RefreshedDynamics, TaskDynamics,
 from stl_lfd.sim.mujoco_model import ARM_JOINTS, FINGER_JOINTS, HAND, PHYSICS_STEPS, build_model
 from stl_lfd.sim.reference import TIME_STEP, Reference, Rollout
 from stl_lfd.sim.scene import Camera, Scene, SceneObject
-from stl_lfd.sim.world import FrameTracker, Target, external_wrench, load_torques, simulate
+from stl_lfd.sim.world import GRAVITY, FrameTracker, Target, external_wrench, load_torques, simulate
 
 PHYSICS_STEP = TIME_STEP / PHYSICS_STEPS
 KEPT_WORLDS = 4  # compiled scenes a backend keeps (rollouts over many placements keep a few)
@@ -168,8 +168,8 @@ class MujocoWorld:
         for row, body in enumerate(bodies):
             # MuJoCo's accelerations carry gravity as the base's acceleration: a - g
             mj.mj_objectAcceleration(model, data, mj.mjtObj.mjOBJ_BODY, body, self._acceleration, 0)
-            accelerations[row] = self._acceleration[3:] + np.array([0.0, 0.0, -9.81])
-        masses = model.body_mass[bodies] if self.load is None else np.append(model.body_mass[self.hand_bodies], self.masses[self.load])
+            accelerations[row] = self._acceleration[3:] + GRAVITY
+        masses = np.append(model.body_mass[self.hand_bodies], [self.masses[self.load]] if self.load is not None else [])
         return external_wrench(force, torque, data.site_xpos[self.wrist], data.site_xpos[self.grasp_target], masses, data.xipos[bodies], accelerations)
 
     def hand_pose(self) -> tuple[np.ndarray, np.ndarray]:

@@ -125,6 +125,7 @@ class PandaWorld:
         self.target: Target | None = None
         self._previous_jacobian: np.ndarray | None = None  # for dJ/dt dq, by differences over a step
         self._accelerations = np.zeros((len(HAND_LINKS) + 1, 3))
+        self._velocities: np.ndarray | None = None  # the bodies' velocities after the last step (None: to read)
         self._started = False  # the wrist sensor holds a stale reading until the first step
         _open_worlds.add(self)
 
@@ -191,6 +192,7 @@ class PandaWorld:
         self.load, self.target, self._previous_jacobian, self._started = None, target, None, False
         self.dynamics.restart()
         self._accelerations[:] = 0.0
+        self._velocities = None
 
     def command(self, target: Target) -> None:
         self.target = target
@@ -218,9 +220,10 @@ class PandaWorld:
         client.setJointMotorControlArray(
             self.robot, FINGER_JOINTS, self.pb.POSITION_CONTROL, targetPositions=[target.opening / 2] * 2, forces=[finger_force] * 2
         )
-        velocities_before = self._body_velocities()
+        velocities_before = self._velocities if self._velocities is not None else self._body_velocities()
         client.stepSimulation()
-        self._accelerations = (self._body_velocities() - velocities_before) / TIME_STEP
+        self._velocities = self._body_velocities()  # read once a step: the next step starts from them
+        self._accelerations = (self._velocities - velocities_before) / TIME_STEP
         self._previous_jacobian = jacobian
         self._started = True
 
@@ -258,6 +261,7 @@ class PandaWorld:
 
     def declare_load(self, item: SceneObject | None) -> None:
         self.load = None if item is None else item.name
+        self._velocities = None  # the load's row changes
 
     def object_poses(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         return {name: tuple(np.asarray(value) for value in self.client.getBasePositionAndOrientation(body)) for name, body in self.movable.items()}  # type: ignore[misc]
