@@ -6,5 +6,6 @@ their registries, `stl_lfd.optim.methods` and `stl_lfd.sim.registry`, which a ne
 SEMANTICS = ("classic", "new")  # space robustness; the robustness of Varnai & Dimarogonas
 # The wrist force-torque sensor: external force (N) and torque (Nm) in the robot base frame.
 WRENCH_SIGNALS = ("fx", "fy", "fz", "tx", "ty", "tz")
-# What every rollout records (then each object frame's NAME_x, NAME_y, NAME_z and NAME_tilt).
+# What every rollout records (then each object frame's NAME_x, NAME_y, NAME_z and NAME_tilt, and
+# the outcome signals of `Scene.recorded_signals`).
 RECORDED_SIGNALS = ("x", "y", "z", "gripper", "force", "qx", "qy", "qz", "qw", "tilt") + WRENCH_SIGNALS

@@ -306,8 +306,9 @@ def rollout(
     place: list[str] = typer.Option([], "--place", help=PLACE_HELP),
 ) -> None:
     """Execute a skill model or a behaviour once and write the recorded signals
-    (t,x,y,z,gripper,force,qx,qy,qz,qw,tilt, then NAME_x,NAME_y,NAME_z and NAME_tilt for each
-    object frame of the scene).
+    (t,x,y,z,gripper,force,qx,qy,qz,qw,tilt,fx,fy,fz,tx,ty,tz, then NAME_x,NAME_y,NAME_z and
+    NAME_tilt for each object frame of the scene, then the outcome signals NAME_speed,
+    NAME_held, NAME_depth, NAME_offset where the scene has them).
 
     Examples:
 

@@ -19,6 +19,7 @@ LEFT_OUT = {
     "gp_slices": "fewer than three trials finished",
     "forces": "no trial touched anything (the contact force was zero throughout)",
     "tilt": "no trial turned the hand by more than a degree",
+    "objects": "the spec compares no signal of the scene's objects (shaft_tilt, shaft_depth, ...) with a number",
     "tracking": "the run learned no tracking model (its backend plays the plan back, it has several object placements, or its method is not plan)",
 }
 
@@ -156,6 +157,12 @@ def caption(name: str, run: RunData) -> str:
             "Circles mark where the unoptimised and the best path start, squares where they end."
             + (" The coloured boxes are the regions the spec uses." if _drawn_regions(run) else "")
             + (" Black arrows: where the best trial's hand points (its approach axis), projected on each view." if _best_turns_the_hand(run) else "")
+            + (
+                " Grey: the objects the task is about (outlines of their bounding boxes); dotted, the path of the moved object's centre "
+                "in the unoptimised and the best trial, its end as a cross."
+                if _drawn_objects(run)
+                else ""
+            )
         ),
         "region_distances": (
             "Signed distance (m, negative inside) to each region the spec names, over the time window in which it applies: "
@@ -183,7 +190,12 @@ def caption(name: str, run: RunData) -> str:
             "out): the skill's timeline trial by trial, the best trial's label in red"
             + ("; the dashed line is where the rollout ends." if len(run.models) == 1 else ".")
         ),
-        "forces": f"Contact force over time per trial: {numbered}.",
+        "forces": f"Contact force over time per trial: {numbered}." + (" Dashed green: the spec's thresholds on it." if run.thresholds.get("force") else ""),
+        "objects": (
+            f"The signals of the scene's objects that the spec constrains, over time per trial: {numbered}; dashed green, the spec's "
+            "thresholds (the shaft's depth below the hole's rim and its offset from the hole's axis in m, its tilt from upright in rad, "
+            "its speed in m/s, held 1 while both fingers touch it)."
+        ),
         "tracking": (
             "How the robot followed its references. Left: the best trial's executed path against its plan (the reference) and against "
             "the prediction of the tracking model learned from the executions, per axis. Right: for every trial, the RMS "
@@ -209,6 +221,12 @@ def _trial_list(run: RunData) -> str:
 def _drawn_regions(run: RunData) -> bool:
     """Whether the trajectories figure draws a region: one that bounds two of x, y, z."""
     return any(len(set(box) & {"x", "y", "z"}) >= 2 for box in run.regions.values())
+
+
+def _drawn_objects(run: RunData) -> bool:
+    from stl_lfd.report import objects
+
+    return bool(objects.fixed_frame_objects(run) or objects.moving_frames(run))
 
 
 def _best_turns_the_hand(run: RunData) -> bool:

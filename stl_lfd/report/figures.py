@@ -11,6 +11,7 @@ from matplotlib.patches import FancyArrowPatch, Rectangle
 
 import stl_lfd.rotations as rotations
 from stl_lfd.hsmm import HSMM
+from stl_lfd.report import objects
 from stl_lfd.report.run_data import RunData, signed_distance
 from stl_lfd.rotations import QUATERNION_COLUMNS
 
@@ -31,7 +32,8 @@ VIEWS = (("x", "y"), ("x", "z"), ("y", "z"))  # from above, then from the side
 def trajectories(run: RunData) -> Figure:
     """End-effector paths of every trial from above (x-y, true to scale) and from the side (x-z,
     y-z); the unoptimised skill dashed, the best in red, starts as circles and ends as squares;
-    the spec's regions as labelled boxes."""
+    the spec's regions as labelled boxes; the scene's frame objects as grey outlines and the
+    moving objects' paths (the shaft's) of the unoptimised and the best trial dotted."""
     tables = {number: table for number, table in run.signals.items() if {"x", "y", "z"} <= set(table.columns)}
     limits = {axis: _limits(run, tables, axis) for axis in "xyz"}
     top_width = float(np.clip(7.0 * np.ptp(limits["x"]) / np.ptp(limits["y"]), 3.0, 8.0))
@@ -40,7 +42,10 @@ def trajectories(run: RunData) -> Figure:
     panels = [figure.add_subplot(grid[:, 0]), figure.add_subplot(grid[0, 1]), figure.add_subplot(grid[1, 1])]
     numbers = [trial.trial for trial in run.trials if trial.trial in tables]
     best = run.best.trial if run.best is not None and run.best.trial in tables else None
+    carried = {0: (INITIAL, "unoptimised")} | ({best: (BEST, "best")} if best is not None else {})
     for axes, (across, up) in zip(panels, VIEWS):
+        objects.draw_objects(axes, run, across, up)
+        objects.draw_object_paths(axes, run, across, up, carried)
         _region_boxes(axes, run, across, up)
         for color, number in zip(_trial_colors(len(numbers)), numbers):
             axes.plot(tables[number].columns[across], tables[number].columns[up], color=color, lw=1)
@@ -65,6 +70,9 @@ def _limits(run: RunData, tables: dict, axis: str, margin: float = 0.06) -> tupl
     """The range of `axis` that holds every path and every region, with a margin."""
     values = [value for table in tables.values() for value in (np.min(table.columns[axis]), np.max(table.columns[axis]))]
     values += [bound for box in run.regions.values() if axis in box for bound in box[axis]]
+    values += objects.object_extents(run, axis)
+    for name in objects.moving_frames(run):
+        values += [value for table in tables.values() for value in (np.min(table.columns[f"{name}_{axis}"]), np.max(table.columns[f"{name}_{axis}"]))]
     low, high = (min(values), max(values)) if values else (0.0, 1.0)
     pad = max(high - low, 0.02) * margin
     return low - pad, high + pad
@@ -419,9 +427,16 @@ def contact_forces(run: RunData) -> Figure | None:
     if highest > 0 and max(float(np.max(table.columns["force"])) for table in tables.values()) > 2.0 * highest:
         axes.set_ylim(-0.05 * highest, 1.5 * highest)  # other trials' collisions would flatten the two that matter
         title += " (other trials' peaks cut off)"
+    objects.draw_thresholds(axes, run.thresholds.get("force", []))
     axes.set(xlabel="t (s)", ylabel="contact force (N)", title=title)
     axes.legend(loc="best")
     return figure
+
+
+def object_signals(run: RunData) -> Figure | None:
+    """The scene objects' signals the spec constrains (shaft tilt, depth, offset...) per trial,
+    with the spec's thresholds."""
+    return objects.object_signals(run, _per_trial)
 
 
 def tracking(run: RunData) -> Figure | None:

@@ -2,19 +2,22 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim import RunDirectory, SearchSpace, Task, Trial, build_search_space
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.tracking import RunTrackingRecord, read_tracking
 from stl_lfd.optim.trials import observations
 from stl_lfd.signals import SignalTable
+from stl_lfd.sim import Scene, load_scene
 from stl_lfd.stl import ast, load_spec
 from stl_lfd.stl.regions import region_boxes
+from stl_lfd.stl.thresholds import Threshold, signal_thresholds
 
 
 @dataclass(frozen=True)
@@ -34,7 +37,8 @@ class RunData:
     Attributes:
         trials: finished trials in order; signals: trial number -> recorded signals (0 is the
         unoptimised skill); regions: name -> {signal: (lo, hi)}; constraints: the temporal
-        use of each region by the spec.
+        use of each region by the spec; thresholds: signal -> the numbers the spec compares it
+        with; scene: the scene at the run's placement (None with several placements).
     """
 
     path: Path
@@ -47,6 +51,8 @@ class RunData:
     regions: dict[str, dict[str, tuple[float, float]]]
     constraints: list[RegionConstraint]
     tracking: RunTrackingRecord | None = None  # tracking.json, when the run learned how its robot tracks
+    thresholds: dict[str, list[Threshold]] = field(default_factory=dict)
+    scene: Scene | None = None
 
     @property
     def best(self) -> Trial | None:
@@ -87,7 +93,21 @@ def load_run(path: Path) -> RunData:
         regions=used_regions(spec),
         constraints=region_constraints(spec),
         tracking=read_tracking(path),
+        thresholds=signal_thresholds(spec),
+        scene=_placed_scene(task),
     )
+
+
+def _placed_scene(task: Task) -> Scene | None:
+    """The task's scene at its one placement (or as the scene file has it); None with several
+    placements, whose recorded signals are the worst placement's."""
+    if len(task.placements) > 1:
+        return None
+    try:
+        scene = load_scene(task.scene)
+    except ConfigError:  # a scene file moved or changed since the run: the figures go without objects
+        return None
+    return scene.place(task.placements[0]) if task.placements else scene
 
 
 def used_regions(spec: ast.Spec) -> dict[str, dict[str, tuple[float, float]]]:

@@ -30,19 +30,22 @@ class KinematicBackend(BackendBase):
         times = recording_times(reference.duration, rate)
         positions = reference.positions_at(times)
         orientations = reference.orientations_at(times)
-        frame_positions, frame_orientations = carried_frames(reference, scene, times, positions, orientations)
-        steps = Steps(
-            times, positions, orientations, reference.gripper_at(times, scene.gripper_opening), np.zeros((times.size, 6)), frame_positions, frame_orientations
-        )
+        frame_positions, frame_orientations, frame_held = carried_frames(reference, scene, times, positions, orientations)
+        gripper = reference.gripper_at(times, scene.gripper_opening)
+        steps = Steps(times, positions, orientations, gripper, np.zeros((times.size, 6)), frame_positions, frame_orientations, frame_held)
         return Rollout(SignalTable(times, signal_columns(steps, scene, times), source="kinematic rollout"), np.zeros(times.size))
 
 
-def carried_frames(reference: Reference, scene: Scene, times: np.ndarray, positions: np.ndarray, orientations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """`T x F x 3` positions of the scene's frames and `T x F x 4` orientations of their first
-    objects at `times`, while the hand (`T x 3` positions, `T x 4` orientations) grasps and
-    releases as the reference's events say."""
+def carried_frames(
+    reference: Reference, scene: Scene, times: np.ndarray, positions: np.ndarray, orientations: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`T x F x 3` positions of the scene's frames, `T x F x 4` orientations of their first
+    objects and `T x F` flags of the frames held (1 from a grasp until the release), at `times`,
+    while the hand (`T x 3` positions, `T x 4` orientations) grasps and releases as the
+    reference's events say."""
     frame_positions = np.tile(np.array([frame.pose.position for frame in scene.frames], dtype=float).reshape(1, -1, 3), (len(times), 1, 1))
     frame_orientations = np.tile(np.array([scene.frame_object_orientation(frame) for frame in scene.frames]).reshape(1, -1, 4), (len(times), 1, 1))
+    frame_held = np.zeros((len(times), len(scene.frames)))
     objects = {item.name: item for item in scene.objects}
     held: list[int] = []  # the frames moving with the grasped object
     start = 0
@@ -53,13 +56,17 @@ def carried_frames(reference: Reference, scene: Scene, times: np.ndarray, positi
             for index in held:
                 local = rotations.rotate(rotations.conjugate(hand), frame_positions[start, index] - positions[start])
                 turned = rotations.multiply(rotations.conjugate(hand), frame_orientations[start, index])
-                frame_positions[start:, index] = positions[start:] + rotations.rotate(orientations[start:], np.tile(local, (len(times) - start, 1)))
-                frame_orientations[start:, index] = rotations.multiply(orientations[start:], turned)
+                carried = slice(start, step)
+                frame_positions[carried, index] = positions[carried] + rotations.rotate(orientations[carried], np.tile(local, (step - start, 1)))
+                frame_orientations[carried, index] = rotations.multiply(orientations[carried], turned)
+                frame_positions[step:, index] = frame_positions[step - 1, index]  # let go: it stays where it was put
+                frame_orientations[step:, index] = frame_orientations[step - 1, index]
+                frame_held[carried, index] = 1.0
             held = []
         if action == "grasp" and step < len(times):
             held = _grasped(scene, objects, positions[step], frame_positions[step], frame_orientations[step])
             start = step
-    return frame_positions, frame_orientations
+    return frame_positions, frame_orientations, frame_held
 
 
 def _grasped(scene: Scene, objects: dict, hand: np.ndarray, frame_positions: np.ndarray, frame_orientations: np.ndarray) -> list[int]:

@@ -23,7 +23,7 @@ import numpy as np
 from stl_lfd.errors import ExecutionError
 from stl_lfd.sim.backend import BackendBase, BackendOptions, Capabilities, Observer
 from stl_lfd.sim.impedance import REST_POSTURE, RefreshedDynamics, TaskDynamics, impedance_torques, pose_error
-from stl_lfd.sim.mujoco_model import ARM_JOINTS, FINGER_JOINTS, HAND, PHYSICS_STEPS, build_model
+from stl_lfd.sim.mujoco_model import ARM_JOINTS, FINGER_JOINTS, FINGERS, HAND, PHYSICS_STEPS, build_model
 from stl_lfd.sim.reference import TIME_STEP, Reference, Rollout
 from stl_lfd.sim.scene import Camera, Scene, SceneObject
 from stl_lfd.sim.world import GRAVITY, FrameTracker, Target, external_wrench, load_torques, simulate
@@ -66,6 +66,7 @@ class MujocoWorld:
         self.torque_address = model.sensor_adr[model.sensor("wrist_torque").id]
         self.hand_bodies = [body for body in range(model.nbody) if self._beyond_wrist(body) and model.body_mass[body] > 0]
         self.movable = {item.name: model.body(item.name).id for item in scene.objects if item.mass > 0}
+        self.finger_bodies = [model.body(name).id for name in FINGERS]
         self.masses = {item.name: item.mass for item in scene.objects}
         self.frames = FrameTracker(scene)
         self._jacobian = np.zeros((6, model.nv))
@@ -190,6 +191,13 @@ class MujocoWorld:
 
     def declare_load(self, item: SceneObject | None) -> None:
         self.load = None if item is None else item.name
+
+    def held_frames(self) -> np.ndarray:
+        contacts = self.data.contact
+        bodies = self.model.geom_bodyid
+        pairs = {frozenset(pair) for pair in zip(bodies[contacts.geom1].tolist(), bodies[contacts.geom2].tolist())}
+        held = {name for name, body in self.movable.items() if all(frozenset((finger, body)) in pairs for finger in self.finger_bodies)}
+        return self.frames.held(held)
 
     def render(self, camera: Camera) -> np.ndarray:
         """`height x width x 3` uint8 image from the scene camera, rendered offscreen."""

@@ -263,6 +263,11 @@ class PandaWorld:
         self.load = None if item is None else item.name
         self._velocities = None  # the load's row changes
 
+    def held_frames(self) -> np.ndarray:
+        contacts = self.client.getContactPoints
+        held = {name for name, body in self.movable.items() if all(contacts(bodyA=self.robot, bodyB=body, linkIndexA=finger) for finger in FINGER_JOINTS)}
+        return self.frames.held(held)
+
     def object_poses(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         return {name: tuple(np.asarray(value) for value in self.client.getBasePositionAndOrientation(body)) for name, body in self.movable.items()}  # type: ignore[misc]
 

@@ -6,7 +6,9 @@ which resamples to the recording rate; the kinematic backend hands its arrays, a
 recording times, to `signal_columns`. Either way the columns are built here and only here:
 
     t, x, y, z, gripper, force, qx, qy, qz, qw, tilt, fx, fy, fz, tx, ty, tz,
-    then NAME_x, NAME_y, NAME_z of each scene frame, then each frame's NAME_tilt.
+    then NAME_x, NAME_y, NAME_z of each scene frame, then each frame's NAME_tilt,
+    then NAME_speed, NAME_held of each frame that moves with an object,
+    then NAME_depth, NAME_offset of each frame that goes into a hole.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from stl_lfd.errors import ExecutionError
 from stl_lfd.rotations import QUATERNION_COLUMNS
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.reference import Reference, Rollout, recording_times
-from stl_lfd.sim.scene import Scene
+from stl_lfd.sim.scene import Scene, lowest_heights
 
 
 @dataclass
@@ -36,6 +38,7 @@ class Steps:
         wrench: `S x 6` external force (N) and torque (Nm) at the wrist, base frame.
         frame_positions: `S x F x 3` positions of the scene's frames.
         frame_orientations: `S x F x 4` orientations of the frames' first objects.
+        frame_held: `S x F`: 1 where both fingers touch the object a frame moves with, else 0.
     """
 
     times: np.ndarray
@@ -45,6 +48,7 @@ class Steps:
     wrench: np.ndarray
     frame_positions: np.ndarray
     frame_orientations: np.ndarray
+    frame_held: np.ndarray
 
 
 def signal_columns(steps: Steps, scene: Scene, times: np.ndarray) -> dict[str, np.ndarray]:
@@ -74,6 +78,32 @@ def signal_columns(steps: Steps, scene: Scene, times: np.ndarray) -> dict[str, n
     tilts = rotations.uprightness(steps.frame_orientations) if scene.frames else np.zeros((len(steps.times), 0))
     for index, frame in enumerate(scene.frames):
         columns[frame.tilt_signal] = np.interp(times, steps.times, tilts[:, index])
+    columns.update({name: at(values) for name, values in outcome_columns(steps, scene).items()})
+    return columns
+
+
+def outcome_columns(steps: Steps, scene: Scene) -> dict[str, np.ndarray]:
+    """At `steps.times`: the speed and held flag of each frame that moves with an object, and the
+    depth below the rim and offset from the axis of each frame that goes into a hole."""
+    index = {frame.name: number for number, frame in enumerate(scene.frames)}
+    columns: dict[str, np.ndarray] = {}
+    for frame in scene.moving_frames:
+        positions = steps.frame_positions[:, index[frame.name]]
+        velocities = np.gradient(positions, steps.times, axis=0) if len(steps.times) > 1 else np.zeros_like(positions)
+        speed_signal, held_signal = frame.motion_signals
+        columns[speed_signal] = np.linalg.norm(velocities, axis=1)
+        columns[held_signal] = steps.frame_held[:, index[frame.name]].astype(float)
+    for frame in scene.frames:
+        if frame.into is None:
+            continue
+        item = scene.carried_object(frame)
+        hole = scene.frames[index[frame.into]]
+        orientations = steps.frame_orientations[:, index[frame.name]]
+        centres = steps.frame_positions[:, index[frame.name]] - rotations.rotate(orientations, np.tile(scene.origin_in_object(frame), (len(steps.times), 1)))
+        hole_positions = steps.frame_positions[:, index[hole.name]]
+        depth_signal, offset_signal = frame.hole_signals
+        columns[depth_signal] = hole_positions[:, 2] + hole.rim - lowest_heights(item.shape, item.size, centres, orientations)
+        columns[offset_signal] = np.hypot(*(centres[:, :2] - hole_positions[:, :2]).T)
     return columns
 
 
@@ -90,16 +120,21 @@ class Recorder:
             wrench=np.empty((count, 6)),
             frame_positions=np.empty((count, frames, 3)),
             frame_orientations=np.empty((count, frames, 4)),
+            frame_held=np.empty((count, frames)),
         )
 
-    def record(self, step: int, pose: tuple[np.ndarray, np.ndarray], gripper: float, wrench: np.ndarray, frames: tuple[np.ndarray, np.ndarray]) -> None:
+    def record(
+        self, step: int, pose: tuple[np.ndarray, np.ndarray], gripper: float, wrench: np.ndarray, frames: tuple[np.ndarray, np.ndarray], held: np.ndarray
+    ) -> None:
         """Instant `step`: the hand's `(position, orientation)`, the finger opening, the `6`
-        wrist wrench, and the frames' `(F x 3 positions, F x 4 orientations)`."""
+        wrist wrench, the frames' `(F x 3 positions, F x 4 orientations)` and which frames'
+        objects the fingers hold (`F`, 1 or 0)."""
         steps = self.steps
         steps.positions[step], steps.orientations[step] = pose
         steps.gripper[step] = gripper
         steps.wrench[step] = wrench
         steps.frame_positions[step], steps.frame_orientations[step] = frames
+        steps.frame_held[step] = held
 
     def rollout(self, reference: Reference, scene: Scene, rate: float, source: str) -> Rollout:
         """The recorded signals at `rate` samples/s, and the tracking error against `reference`."""

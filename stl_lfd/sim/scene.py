@@ -105,6 +105,20 @@ def distance_to_shape(shape: str, size: tuple[float, ...], point: np.ndarray) ->
     return float(max(np.linalg.norm(point) - size[0], 0.0))
 
 
+def lowest_heights(shape: str, size: tuple[float, ...], centres: np.ndarray, orientations: np.ndarray) -> np.ndarray:
+    """`S` heights (m) of the lowest point of a box, cylinder or sphere (`size` as `SceneObject`'s)
+    whose centre is at `centres` (`S x 3`) and turned by `orientations` (`S x 4` quaternions)."""
+    centres = np.asarray(centres, dtype=float)
+    if shape == "sphere":
+        return centres[:, 2] - size[0]
+    axes_z = rotations.to_matrix(orientations)[:, 2, :]  # S x 3: the height of each body axis
+    if shape == "box":
+        return centres[:, 2] - np.abs(axes_z) @ np.asarray(size, dtype=float)
+    radius, height = size[0], size[1]
+    vertical = np.clip(np.abs(axes_z[:, 2]), 0.0, 1.0)
+    return centres[:, 2] - height / 2 * vertical - radius * np.sqrt(1.0 - vertical**2)
+
+
 @dataclass(frozen=True)
 class SceneFrame:
     """A named object pose that skills refer to (a TP-HSMM frame) and that can be placed.
@@ -121,6 +135,10 @@ class SceneFrame:
             taken as the equivalent yaw nearest `home_yaw`, so skills see the object as it was
             demonstrated.
         home_yaw: the yaw of the frame in the scene file (rad).
+        rim: the frame holds a hole whose axis is the frame's vertical through its origin and
+            whose rim lies `rim` metres above the origin (None: no hole).
+        into: the frame (one with a `rim`) whose hole this frame's movable object goes into;
+            rollouts then record `NAME_depth` and `NAME_offset` (None: no hole to go into).
     """
 
     name: str
@@ -129,6 +147,8 @@ class SceneFrame:
     area: tuple[tuple[float, float], tuple[float, float]] | None = None
     symmetry: int = 1
     home_yaw: float = 0.0
+    rim: float | None = None
+    into: str | None = None
 
     def equivalent(self, pose: Pose) -> Pose:
         """`pose` with its yaw turned by a multiple of the symmetry's angle to lie within half of
@@ -146,6 +166,19 @@ class SceneFrame:
         """The recorded angle (rad, 0 to pi/2) between the z axis of the frame's first object (a
         cylinder's axis) and the vertical."""
         return f"{self.name}_tilt"
+
+    @property
+    def motion_signals(self) -> tuple[str, str]:
+        """For a frame that moves with a movable object: its origin's speed (m/s) and whether
+        both fingers touch the object (1 or 0)."""
+        return (f"{self.name}_speed", f"{self.name}_held")
+
+    @property
+    def hole_signals(self) -> tuple[str, str]:
+        """For a frame that goes `into` a hole: how deep its object's lowest point is below the
+        rim (m, negative above it), and the horizontal distance (m) from the object's centre
+        to the hole's axis."""
+        return (f"{self.name}_depth", f"{self.name}_offset")
 
 
 @dataclass(frozen=True)
@@ -202,9 +235,34 @@ class Scene:
 
     @property
     def recorded_signals(self) -> tuple[str, ...]:
-        """What a rollout in this scene records: `RECORDED_SIGNALS`, each frame's position, then
-        each frame's tilt."""
-        return RECORDED_SIGNALS + tuple(signal for frame in self.frames for signal in frame.signals) + tuple(frame.tilt_signal for frame in self.frames)
+        """What a rollout in this scene records: `RECORDED_SIGNALS`, each frame's position, each
+        frame's tilt, then the speed and held flag of each frame that moves with a movable object
+        (`moving_frames`), then the depth and offset of each frame that goes into a hole."""
+        return (
+            RECORDED_SIGNALS
+            + tuple(signal for frame in self.frames for signal in frame.signals)
+            + tuple(frame.tilt_signal for frame in self.frames)
+            + tuple(signal for frame in self.moving_frames for signal in frame.motion_signals)
+            + tuple(signal for frame in self.frames if frame.into for signal in frame.hole_signals)
+        )
+
+    def carried_object(self, frame: SceneFrame) -> SceneObject | None:
+        """The movable object `frame` moves with (the first it lists), or None."""
+        objects = {item.name: item for item in self.objects}
+        return next((objects[name] for name in frame.objects if objects[name].mass > 0), None)
+
+    def origin_in_object(self, frame: SceneFrame) -> np.ndarray:
+        """`3`: where `frame`'s origin is in the frame of its carried object (`carried_object`),
+        which it moves with rigidly."""
+        item = self.carried_object(frame)
+        assert item is not None, f"frame {frame.name} moves with no object"
+        turn = rotations.from_euler(*item.orientation)
+        return rotations.rotate(rotations.conjugate(turn), np.asarray(frame.pose.position) - np.asarray(item.position))
+
+    @property
+    def moving_frames(self) -> tuple[SceneFrame, ...]:
+        """The frames that move with a movable object."""
+        return tuple(frame for frame in self.frames if self.carried_object(frame) is not None)
 
     def check_placement(self, placements: Mapping[str, Pose], source: str = "--place") -> None:
         """ConfigError (naming `source`) for a frame the scene lacks or a position outside the

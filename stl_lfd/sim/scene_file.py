@@ -116,14 +116,34 @@ def parse_scene(data: dict[str, Any], path: Path) -> Scene:
     frames = data.get("frames") or {}
     if not isinstance(frames, dict):
         raise ConfigError(f"{path}: 'frames' must map each frame's name to its pose and objects")
-    return replace(scene, frames=tuple(_parse_frame(name, item, path, scene) for name, item in frames.items()))
+    scene = replace(scene, frames=tuple(_parse_frame(name, item, path, scene) for name, item in frames.items()))
+    _check_holes(scene, path)
+    return scene
+
+
+def _check_holes(scene: Scene, path: Path) -> None:
+    """ConfigError for an `into` that names no frame with a `rim`, or whose frame does not start
+    with a movable object."""
+    rims = [frame.name for frame in scene.frames if frame.rim is not None]
+    objects = {item.name: item for item in scene.objects}
+    for frame in scene.frames:
+        if frame.into is None:
+            continue
+        if frame.into not in rims or frame.into == frame.name:
+            raise ConfigError(
+                f"{path}: 'frames.{frame.name}.into' must name another frame with a 'rim' (a hole; got {shown(frame.into)}; frames with one: {', '.join(rims) or 'none'})"
+            )
+        if objects[frame.objects[0]].mass <= 0:
+            raise ConfigError(
+                f"{path}: 'frames.{frame.name}.into': the frame's first object, {frame.objects[0]}, must be movable (a mass above 0): it is what goes into the hole"
+            )
 
 
 def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
     where = f"frames.{name}"
     if not isinstance(name, str) or not name.isidentifier() or name == BASE_FRAME:
         raise ConfigError(f"{path}: frame name {shown(name)} must be a name (letters, digits, _) other than '{BASE_FRAME}'")
-    check_keys(data, ("position", "yaw", "objects", "area", "symmetry"), path, where, required=("position", "objects"))
+    check_keys(data, ("position", "yaw", "objects", "area", "symmetry", "rim", "into"), path, where, required=("position", "objects"))
     pose = parse_pose({key: data[key] for key in ("position", "yaw") if key in data}, path, where)
     objects = data["objects"]
     known = [item.name for item in scene.objects]
@@ -141,7 +161,11 @@ def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
         raise ConfigError(
             f"{path}: '{where}.symmetry' must be a whole number of yaws that give the same objects (1: none, 2: a half turn, 4: a quarter turn; got {shown(symmetry)})"
         )
-    frame = SceneFrame(name, pose, tuple(str(item) for item in objects), area, symmetry, pose.yaw)  # type: ignore[arg-type]
+    rim = number(data["rim"], path, f"{where}.rim") if "rim" in data else None
+    into = data.get("into")
+    if into is not None and not isinstance(into, str):
+        raise ConfigError(f"{path}: '{where}.into' must name the frame whose hole the object goes into (got {shown(into)})")
+    frame = SceneFrame(name, pose, tuple(str(item) for item in objects), area, symmetry, pose.yaw, rim, into)  # type: ignore[arg-type]
     check_area(frame, pose, str(path))
     return frame
 

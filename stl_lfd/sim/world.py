@@ -74,6 +74,9 @@ class World(Protocol):
     def object_poses(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Movable object name -> its position and orientation now."""
 
+    def held_frames(self) -> np.ndarray:
+        """`F`: 1 for each scene frame whose object both fingers touch now, else 0."""
+
     def declare_load(self, item: SceneObject | None) -> None:
         """The object the hand now holds (None: nothing), for the wrench's compensation."""
 
@@ -97,7 +100,7 @@ def simulate(world: World, reference: Reference, scene: Scene, rate: float, obse
 
     recorder = Recorder(step_times, len(scene.frames))
     world.reset(target(0))
-    recorder.record(0, world.hand_pose(), world.gripper_opening(), world.wrench(), world.frame_poses())
+    recorder.record(0, world.hand_pose(), world.gripper_opening(), world.wrench(), world.frame_poses(), world.held_frames())
     if observer is not None:
         observer(0.0, world)
     events = list(reference.events)
@@ -107,7 +110,7 @@ def simulate(world: World, reference: Reference, scene: Scene, rate: float, obse
             world.declare_load(graspable(world, scene, time) if action == "grasp" else None)
         world.command(target(step - 1))  # the world is at the previous step's time: its target, its twist
         world.step()
-        recorder.record(step, world.hand_pose(), world.gripper_opening(), world.wrench(), world.frame_poses())
+        recorder.record(step, world.hand_pose(), world.gripper_opening(), world.wrench(), world.frame_poses(), world.held_frames())
         if observer is not None:
             observer(step_times[step], world)
     recorder.steps.wrench = low_pass(recorder.steps.wrench, scene.force_filter_hz, TIME_STEP)
@@ -137,17 +140,13 @@ class FrameTracker:
     their first object's orientation."""
 
     def __init__(self, scene: Scene) -> None:
-        items = {item.name: item for item in scene.objects}
         self.positions = np.array([frame.pose.position for frame in scene.frames], dtype=float).reshape(-1, 3)
         self.orientations = np.array([scene.frame_object_orientation(frame) for frame in scene.frames], dtype=float).reshape(-1, 4)
         self.moving: list[tuple[int, str, np.ndarray]] = []  # (frame index, object, the frame's origin in the object's frame)
         for index, frame in enumerate(scene.frames):
-            movable = [name for name in frame.objects if items[name].mass > 0]
-            if movable:
-                item = items[movable[0]]
-                turn = rotations.from_euler(*item.orientation)
-                local = rotations.rotate(rotations.conjugate(turn), np.asarray(frame.pose.position) - np.asarray(item.position))
-                self.moving.append((index, item.name, local))
+            item = scene.carried_object(frame)
+            if item is not None:
+                self.moving.append((index, item.name, scene.origin_in_object(frame)))
 
     def poses(self, object_poses: dict[str, tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
         """`F x 3` frame positions and `F x 4` orientations, given movable object name -> (position,
@@ -158,6 +157,13 @@ class FrameTracker:
             positions[index] = position + rotations.rotate(orientation, local)
             orientations[index] = orientation
         return positions, orientations
+
+    def held(self, objects: set[str]) -> np.ndarray:
+        """`F`: 1 for the frames that move with one of `objects` (those the fingers hold), else 0."""
+        flags = np.zeros(len(self.positions))
+        for index, name, _ in self.moving:
+            flags[index] = name in objects
+        return flags
 
 
 def load_torques(jacobian: np.ndarray, hand: np.ndarray, centre: np.ndarray, mass: float) -> np.ndarray:

@@ -153,3 +153,33 @@ def test_only_the_regions_the_spec_uses_are_drawn(tmp_path):
     (tmp_path / "regions.stl").write_text((ROOT / "specs" / "regions.stl").read_text())
     (tmp_path / "mine.stl").write_text('include "regions.stl"\nNEAR := L1\nmine := F NEAR & G[0, 5] !L3\n')
     assert list(used_regions(load_spec(tmp_path / "mine.stl"))) == ["L1", "L3"]
+
+
+@pytest.mark.slow
+def test_a_contact_run_draws_its_objects_and_the_specs_thresholds_on_their_signals(tmp_path):
+    task = load_task(ROOT / "configs" / "phi3_inserted.yaml").with_overrides(backend="kinematic", method="random", initial=2, trials=3)
+    finish_run(start_run(task, tmp_path / "run"))
+    result = runner.invoke(app, ["report", str(tmp_path / "run")])
+    assert result.exit_code == 0, result.stderr
+    report = tmp_path / "run" / "report"
+    assert_picture(report / "objects.png")
+    page = page_text(report / "index.html")
+    assert "Grey: the objects the task is about" in page and "dashed green, the spec's thresholds" in page
+    run = load_run(tmp_path / "run")
+    from stl_lfd.report import objects
+
+    assert objects.constrained_object_signals(run) == ["shaft_held", "shaft_speed", "shaft_depth", "shaft_offset", "shaft_tilt"]
+    assert {item.name for item in objects.fixed_frame_objects(run)} == {"holder_left", "holder_right", "holder_front", "holder_back"}
+
+
+def test_an_objects_outline_is_its_turned_box_seen_from_a_side():
+    from stl_lfd.report.objects import corners, outline
+    from stl_lfd.sim.scene import SceneObject
+
+    wall = SceneObject("wall", "box", (0.01, 0.03, 0.02), (0.5, 0.2, 0.04), orientation=(0.0, 0.0, np.pi / 2))
+    top = outline(corners(wall)[:, :2])
+    assert (
+        len(top) == 4
+        and np.allclose(np.sort(np.unique(np.round(top[:, 0], 6))), [0.47, 0.53])
+        and np.allclose(np.sort(np.unique(np.round(top[:, 1], 6))), [0.19, 0.21])
+    )

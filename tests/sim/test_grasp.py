@@ -86,6 +86,18 @@ def test_release_leaves_the_shaft_standing_in_the_holder(aligned):
 
 
 @pytest.mark.slow
+def test_the_outcome_signals_see_the_shaft_held_carried_and_let_go_in_the_hole(aligned):
+    rollout, _ = aligned
+    columns, times = rollout.signals.columns, rollout.signals.times
+    held = columns["shaft_held"]
+    assert held[times < 2.9].max() == 0.0 and held[(times > 3.5) & (times < 10.9)].min() == 1.0 and held[times > 11.5].max() == 0.0
+    assert columns["shaft_speed"][(times > 6.0) & (times < 7.0)].min() > 0.05  # carried
+    assert columns["shaft_speed"][times > 12.0].max() < 0.01  # at rest once let go
+    assert columns["shaft_depth"][-1] == pytest.approx(0.04, abs=0.003)  # its bottom on the table, 4 cm below the rim
+    assert columns["shaft_offset"][-1] < 0.006
+
+
+@pytest.mark.slow
 def test_the_wrist_feels_no_force_in_free_motion_nor_while_carrying(aligned):
     rollout, _ = aligned
     force, times = rollout.signals.columns["force"], rollout.signals.times
@@ -104,6 +116,8 @@ def test_a_misaligned_insertion_pushes_on_the_holder_as_a_compliant_arm_does(eng
     pushing = force[(times > 9.0) & (times < 11.0)]
     # the hand is sent 7.5 cm below the rim: a 400 N/m spring, not a position-controlled arm
     assert 5.0 < pushing.max() < 60.0
+    columns = rollout.signals.columns
+    assert columns["shaft_depth"][-1] < 0.01 or columns["shaft_offset"][-1] > 0.006  # not in the hole
 
 
 @pytest.mark.parametrize("engine", ENGINES)

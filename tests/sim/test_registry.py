@@ -26,7 +26,9 @@ class ToyBackend(BackendBase):
         recorder = Recorder(step_times, len(scene.frames))
         frames = (np.array([frame.pose.position for frame in scene.frames]).reshape(-1, 3), np.tile([0.0, 0.0, 0.0, 1.0], (len(scene.frames), 1)))
         for step, (position, orientation) in enumerate(zip(reference.positions_at(step_times), reference.orientations_at(step_times))):
-            recorder.record(step, (position + [0.0, 0.0, 0.01], orientation), 0.08, np.array([0.0, 0.0, -2.0, 0.0, 0.0, 0.0]), frames)
+            recorder.record(
+                step, (position + [0.0, 0.0, 0.01], orientation), 0.08, np.array([0.0, 0.0, -2.0, 0.0, 0.0, 0.0]), frames, np.zeros(len(scene.frames))
+            )
             if observer is not None:
                 observer(step_times[step], self)
         return recorder.rollout(reference, scene, rate, "toy rollout")

@@ -85,7 +85,10 @@ def test_placing_a_frame_moves_its_objects_rigidly():
         else:
             assert item == before[item.name]
     assert placed.frame_poses["holder"] == Pose((0.6, 0.1, 0.04), 0.5)
-    assert placed.recorded_signals[-8:] == ("shaft_x", "shaft_y", "shaft_z", "holder_x", "holder_y", "holder_z", "shaft_tilt", "holder_tilt")
+    assert placed.recorded_signals[-12:] == (
+        "shaft_x", "shaft_y", "shaft_z", "holder_x", "holder_y", "holder_z", "shaft_tilt", "holder_tilt",
+        "shaft_speed", "shaft_held", "shaft_depth", "shaft_offset",
+    )  # fmt: skip
 
 
 def test_placements_outside_the_table_or_of_unknown_frames_are_refused():
@@ -137,5 +140,36 @@ def test_a_frame_symmetry_must_be_a_positive_whole_number(tmp_path, value):
         f"frames:\n  cup: {{position: [0.5, 0, 0.02], objects: [a], symmetry: {value}}}\n",
     )
     with pytest.raises(ConfigError, match=r"'frames.cup.symmetry' must be a whole number") as error:
+        load_scene(path)
+    assert str(path) in str(error.value)
+
+
+HOLE_SCENE = (
+    "description: d\nobjects:\n"
+    "  - {name: peg, shape: cylinder, size: [0.01, 0.1], position: [0.4, 0, 0.07], mass: 0.05}\n"
+    "  - {name: block, shape: box, size: [0.02, 0.02, 0.02], position: [0.6, 0, 0.04]}\n"
+    "frames:\n  peg: {position: [0.4, 0, 0.07], objects: [peg], %s}\n  cup: {position: [0.6, 0, 0.04], objects: [block], %s}\n"
+)
+
+
+def test_a_frame_that_goes_into_a_hole_records_its_depth_and_offset(tmp_path):
+    scene = load_scene(write(tmp_path, HOLE_SCENE % ("into: cup", "rim: 0.02")))
+    assert scene.frames[0].into == "cup" and scene.frames[1].rim == 0.02
+    assert scene.recorded_signals[-4:] == ("peg_speed", "peg_held", "peg_depth", "peg_offset")  # the fixed cup has no motion signals
+
+
+@pytest.mark.parametrize(
+    "peg, cup, message",
+    [
+        ("into: cup", "symmetry: 1", r"'frames.peg.into' must name another frame with a 'rim' \(a hole; got 'cup'; frames with one: none\)"),
+        ("into: peg, rim: 0.01", "symmetry: 1", r"'frames.peg.into' must name another frame with a 'rim'"),
+        ("rim: 0.01", "into: peg", r"'frames.cup.into': the frame's first object, block, must be movable"),
+        ("into: [cup]", "rim: 0.02", r"'frames.peg.into' must name the frame whose hole the object goes into"),
+        ("into: cup", "rim: high", r"'frames.cup.rim' must be a number"),
+    ],
+)
+def test_bad_holes_name_the_file_and_the_frame(tmp_path, peg, cup, message):
+    path = write(tmp_path, HOLE_SCENE % (peg, cup))
+    with pytest.raises(ConfigError, match=message) as error:
         load_scene(path)
     assert str(path) in str(error.value)

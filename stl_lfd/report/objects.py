@@ -1,0 +1,135 @@
+"""The scene's objects in a report: the outlines of the objects the task is about (those of the
+scene's frames: the holder and its hole, the rails) and the paths of the objects that move (the
+shaft), in the trajectory views; and the figure of the object signals the spec constrains
+(`shaft_tilt`, `shaft_depth`, `shaft_offset`, ...) with the spec's thresholds drawn on them."""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.patches import Polygon
+
+import stl_lfd.rotations as rotations
+from stl_lfd.report.run_data import RunData
+from stl_lfd.sim.scene import SceneObject
+from stl_lfd.stl.thresholds import Threshold
+
+OBJECT_COLOR = "0.35"
+AXES = {"x": 0, "y": 1, "z": 2}
+# The unit of an object signal, by the end of its name (docs/execution.md, signals).
+UNITS = {"tilt": "rad", "depth": "m", "offset": "m", "speed": "m/s", "held": "1: held", "x": "m", "y": "m", "z": "m"}
+
+
+def corners(item: SceneObject) -> np.ndarray:
+    """`8 x 3` corners of the box that bounds `item` in its own frame, in the base frame."""
+    if item.shape == "box":
+        half = np.asarray(item.size, dtype=float)
+    elif item.shape == "cylinder":
+        half = np.array([item.size[0], item.size[0], item.size[1] / 2])
+    else:
+        half = np.full(3, item.size[0])
+    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
+    turn = rotations.from_euler(*item.orientation)
+    return np.asarray(item.position, dtype=float) + rotations.rotate(turn, signs * half)
+
+
+def outline(points: np.ndarray) -> np.ndarray:
+    """The convex hull of `N x 2` points, counter-clockwise (Andrew's monotone chain)."""
+    ordered = sorted(set(map(tuple, np.round(points, 9))))
+    if len(ordered) < 3:
+        return np.array(ordered)
+
+    def half(sequence):
+        hull: list[tuple[float, float]] = []
+        for point in sequence:
+            while len(hull) >= 2 and _turn(hull[-2], hull[-1], point) <= 0:
+                hull.pop()
+            hull.append(point)
+        return hull[:-1]
+
+    return np.array(half(ordered) + half(ordered[::-1]))
+
+
+def _turn(origin, first, second) -> float:
+    """The z of (first - origin) x (second - origin): positive for a left turn."""
+    return (first[0] - origin[0]) * (second[1] - origin[1]) - (first[1] - origin[1]) * (second[0] - origin[0])
+
+
+def fixed_frame_objects(run: RunData) -> list[SceneObject]:
+    """The fixed objects of the scene's frames (what a movable object is put into or taken
+    from), at the run's placement; none when the run has several placements."""
+    scene = run.scene
+    if scene is None:
+        return []
+    names = {name for frame in scene.frames for name in frame.objects}
+    return [item for item in scene.objects if item.name in names and item.mass == 0]
+
+
+def draw_objects(axes, run: RunData, across: str, up: str) -> None:
+    """The fixed frame objects' outlines in the view (`across`, `up`), filled light grey."""
+    for index, item in enumerate(fixed_frame_objects(run)):
+        hull = outline(corners(item)[:, [AXES[across], AXES[up]]])
+        label = "objects (holder, rails)" if index == 0 else None
+        axes.add_patch(Polygon(hull, closed=True, facecolor=OBJECT_COLOR, alpha=0.25, edgecolor=OBJECT_COLOR, lw=0.8, zorder=2, label=label))
+
+
+def object_extents(run: RunData, axis: str) -> list[float]:
+    """The lowest and highest `axis` coordinates of the fixed frame objects."""
+    points = [corners(item)[:, AXES[axis]] for item in fixed_frame_objects(run)]
+    return [float(np.min(values)) for values in points] + [float(np.max(values)) for values in points]
+
+
+def moving_frames(run: RunData) -> list[str]:
+    """The names of the frames that move with an object and whose positions the run recorded."""
+    if run.scene is None:
+        return []
+    recorded = set().union(*(table.columns for table in run.signals.values())) if run.signals else set()
+    return [frame.name for frame in run.scene.moving_frames if set(frame.signals) <= recorded]
+
+
+def draw_object_paths(axes, run: RunData, across: str, up: str, trials: dict[int, tuple]) -> None:
+    """The path of each moving frame's origin (the shaft's centre) in `trials` (trial number ->
+    (colour, label)), dotted, with its end as a cross."""
+    for name in moving_frames(run):
+        for number, (color, label) in trials.items():
+            table = run.signals.get(number)
+            if table is None:
+                continue
+            x, y = table.columns[f"{name}_{across}"], table.columns[f"{name}_{up}"]
+            axes.plot(x, y, color=color, lw=1.4, ls=":", zorder=3, label=f"{name}, {label}")
+            axes.plot(x[-1:], y[-1:], marker="X", ms=8, color=color, mec="white", ls="none", zorder=5)
+
+
+def constrained_object_signals(run: RunData) -> list[str]:
+    """The signals of the scene's frames (`NAME_...`) that the spec compares with a number."""
+    if run.scene is None:
+        return []
+    prefixes = tuple(f"{frame.name}_" for frame in run.scene.frames)
+    recorded = set().union(*(table.columns for table in run.signals.values())) if run.signals else set()
+    return [signal for signal in run.thresholds if signal.startswith(prefixes) and signal in recorded]
+
+
+def draw_thresholds(axes, thresholds: list[Threshold]) -> None:
+    """Each threshold as a dashed horizontal line, labelled as the spec writes it."""
+    for threshold in thresholds:
+        axes.axhline(threshold.value, color="tab:green", ls="--", lw=1.2, label=f"spec: {threshold}", zorder=1)
+
+
+def object_signals(run: RunData, per_trial) -> Figure | None:
+    """One panel per object signal the spec constrains, every trial's curve (`per_trial`, the
+    figures' way of drawing them) and the spec's thresholds; None when it constrains none."""
+    signals = constrained_object_signals(run)
+    if not signals:
+        return None
+    figure = Figure(figsize=(9, 2.2 * len(signals) + 0.8), layout="constrained")
+    panels = np.atleast_1d(figure.subplots(len(signals), 1, sharex=True))
+    for axes, signal in zip(panels, signals):
+        curves = {number: (table.times, table.columns[signal]) for number, table in run.signals.items() if signal in table.columns}
+        per_trial(axes, run, curves)
+        draw_thresholds(axes, run.thresholds[signal])
+        unit = UNITS.get(signal.rsplit("_", 1)[-1], "")
+        axes.set_ylabel(f"{signal} ({unit})" if unit else signal, fontsize=9)
+        axes.legend(loc="upper left", bbox_to_anchor=(1, 1), fontsize=8)
+    panels[-1].set_xlabel("t (s)")
+    figure.suptitle(f"{run.task.name}: the objects' signals the spec constrains, per trial")
+    return figure

@@ -1,0 +1,55 @@
+"""The physical outcome signals (`NAME_speed`, `NAME_held`, `NAME_depth`, `NAME_offset`): the
+geometry they rest on, and what the kinematic backend records for a pick and insert."""
+
+import math
+
+import numpy as np
+import pytest
+
+import stl_lfd.rotations as rotations
+from stl_lfd.sim import Reference, execute, load_scene
+from stl_lfd.sim.scene import lowest_heights
+
+UPRIGHT = np.array([[0.0, 0.0, 0.0, 1.0]])
+LYING = rotations.from_euler(math.pi / 2, 0.0, 0.0)[None]
+
+
+@pytest.mark.parametrize(
+    "shape, size, orientation, lowest",
+    [
+        ("cylinder", (0.01, 0.12), UPRIGHT, 0.5 - 0.06),
+        ("cylinder", (0.01, 0.12), LYING, 0.5 - 0.01),
+        ("cylinder", (0.01, 0.12), rotations.from_euler(math.radians(30), 0.0, 0.0)[None], 0.5 - 0.06 * math.cos(math.radians(30)) - 0.01 * 0.5),
+        ("box", (0.01, 0.02, 0.03), UPRIGHT, 0.5 - 0.03),
+        ("box", (0.01, 0.02, 0.03), LYING, 0.5 - 0.02),
+        ("sphere", (0.02,), LYING, 0.5 - 0.02),
+    ],
+)
+def test_the_lowest_point_of_a_turned_shape(shape, size, orientation, lowest):
+    assert lowest_heights(shape, size, np.array([[0.1, 0.2, 0.5]]), orientation)[0] == pytest.approx(lowest)
+
+
+def carry_into_hole(scene, grasp, hole_top):
+    """Down to the shaft, grasp at 2 s, carry it to `hole_top`, release at 8 s, rise."""
+    times = np.arange(0.0, 10.0, 0.01)
+    waypoints = np.array([grasp + [0, 0, 0.1], grasp, grasp, grasp + [0, 0, 0.15], hole_top + [0, 0, 0.1], hole_top, hole_top, hole_top + [0, 0, 0.1]])
+    knots = np.array([0.0, 1.5, 2.5, 3.5, 5.0, 7.0, 8.2, 9.5])
+    positions = np.column_stack([np.interp(times, knots, waypoints[:, axis]) for axis in range(3)])
+    gripper = np.where((times >= 2.0) & (times < 8.0), 0.0, 0.08)
+    return Reference(times, positions, gripper, ((2.0, "grasp"), (8.0, "release")))
+
+
+def test_the_kinematic_backend_records_the_shaft_held_moving_and_in_the_hole():
+    scene = load_scene("pick_insert")
+    grasp, hole = np.array([0.45, -0.25, 0.11]), np.array([0.553, 0.20, 0.11])  # 3 mm off the hole's axis
+    signals = execute(carry_into_hole(scene, grasp, hole), scene, "kinematic", rate=100.0).signals
+    columns, times = signals.columns, signals.times
+    held = columns["shaft_held"]
+    assert np.all(held[(times >= 2.0) & (times < 8.0)] == 1.0) and np.all(held[(times < 1.99) | (times >= 8.01)] == 0.0)
+    assert columns["shaft_speed"][times < 2.0].max() < 1e-9  # standing still before the grasp
+    assert columns["shaft_speed"][(times > 3.7) & (times < 4.8)].max() > 0.1  # carried
+    # the grasp point is 3 cm above the shaft's centre; its bottom 6 cm below the centre
+    assert columns["shaft_depth"][0] == pytest.approx(0.06 - 0.02)  # standing on the table, as deep as the rim is high
+    assert columns["shaft_depth"][-1] == pytest.approx(0.06 - (0.11 - 0.03 - 0.06))
+    assert columns["shaft_offset"][-1] == pytest.approx(0.003, abs=1e-6)
+    assert columns["shaft_offset"][0] == pytest.approx(math.hypot(0.1, 0.45))
