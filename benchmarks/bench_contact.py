@@ -7,19 +7,12 @@ the unoptimised trial included, read from the run directory's recorded shaft and
         [--seeds 0-9] [--methods plan,random] [--trials 16] [--backend pybullet] [--jobs 1]
         [--robot LABEL] [--out benchmarks/results/contact.jsonl]
 
-Each trial's shaft ends
-  THROWN    more than 15 cm (in x-y) from both the hole's centre and where the shaft started,
-            or off the table (its centre below the table's top less 5 mm, or outside its x-y);
-  INSERTED  in the hole: its bottom below the holder's top, its centre within the clearance
-            (6 mm) of the hole's axis and upright within 3 degrees (bench_reorient.inserted);
-  OTHER     anywhere else (on the table, on the holder, still in the hand).
-A trial that failed (no signals) is counted apart. FLUNG: the shaft's centre moved faster than
-1 m/s at some instant (the hand never goes faster; a shaft that does was thrown or dropped).
-PHYSICALLY INSERTED: it ends INSERTED and was never flung. Satisfied: robustness > 0 as the run
-recorded it; the verdict AGREES with the check when satisfied == physically inserted. For the
-inserted trials the spec rejects, the spec's failing parts are counted. One JSON line per run
-(task, method, seed) is appended to --out, with the commit. About 1-2 s per rollout on one
-core: 17 rollouts a run, 60 runs by default.
+Each trial's end is classified by `benchmarks.physical` (thrown, inserted, other; flung on
+the way; physically inserted). A trial that failed (no signals) is counted apart. Satisfied:
+robustness > 0 as the run recorded it; the verdict AGREES with the check when satisfied ==
+physically inserted. For the inserted trials the spec rejects, the spec's failing parts are
+counted. One JSON line per run (task, method, seed) is appended to --out, with the commit.
+About 1-2 s per rollout on one core: 17 rollouts a run, 60 runs by default.
 """
 
 from __future__ import annotations
@@ -34,15 +27,11 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from benchmarks.physical import flung, holder_pose, shaft_end
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "contact.jsonl"
 TASKS = ("phi3", "phi3_reorient", "phi3_reorient_one")
-# The scenes' table: a box centred at (0.5, 0, 0.01) with half extents (0.25, 0.45, 0.01).
-TABLE_TOP, TABLE_X, TABLE_Y = 0.02, (0.25, 0.75), (-0.45, 0.45)
-THROW_DISTANCE, BELOW_TOP = 0.15, 0.005
-FLUNG_SPEED = 1.0  # m/s
 CLASSES = ("thrown", "inserted", "other", "failed")
 
 
@@ -53,39 +42,6 @@ def seed_list(text: str) -> list[int]:
         first, _, last = part.partition("-")
         seeds.extend(range(int(first), int(last or first) + 1))
     return seeds
-
-
-def holder_pose(task: Any) -> Any:
-    """The holder frame's pose in `task` (its placement, else the scene's)."""
-    from stl_lfd.sim import load_scene
-
-    placed = task.placements[0] if task.placements else {}
-    return placed.get("holder") or load_scene(task.scene).frame_poses["holder"]
-
-
-def shaft_end(signals: Any, holder: Any) -> str:
-    """`thrown`, `inserted` or `other`: where the shaft ends (`holder`: the hole frame's pose,
-    whose yaw the recorded signals do not carry)."""
-    from benchmarks.bench_reorient import inserted
-    from stl_lfd.poses import Pose
-
-    columns = signals.columns
-    x, y, z = (float(columns[f"shaft_{axis}"][-1]) for axis in "xyz")
-    hole = np.array([columns["holder_x"][-1], columns["holder_y"][-1]])
-    start = np.array([columns["shaft_x"][0], columns["shaft_y"][0]])
-    far = min(np.hypot(*(np.array([x, y]) - hole)), np.hypot(*(np.array([x, y]) - start))) > THROW_DISTANCE
-    off_table = z < TABLE_TOP - BELOW_TOP or not (TABLE_X[0] <= x <= TABLE_X[1] and TABLE_Y[0] <= y <= TABLE_Y[1])
-    if far or off_table:
-        return "thrown"
-    hole_frame = Pose((float(hole[0]), float(hole[1]), float(columns["holder_z"][-1])), holder.yaw, holder.quaternion)
-    return "inserted" if inserted(signals, hole_frame)[0] else "other"
-
-
-def flung(signals: Any) -> bool:
-    """Whether the shaft's centre ever moved faster than `FLUNG_SPEED` (from its recorded positions)."""
-    positions = np.column_stack([signals.columns[f"shaft_{axis}"] for axis in "xyz"])
-    velocities = np.diff(positions, axis=0) / np.diff(signals.times)[:, None]
-    return bool(np.linalg.norm(velocities, axis=1).max(initial=0.0) > FLUNG_SPEED)
 
 
 def one_run(job: tuple[str, str, int, int, str]) -> dict[str, Any]:

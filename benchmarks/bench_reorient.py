@@ -21,13 +21,13 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks._timing import Row, print_table
+from benchmarks.physical import inserted
 from stl_lfd.hsmm import load_demo_frames, load_demos
 from stl_lfd.poses import Pose
 from stl_lfd.skill import PlacedSkill, placed_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 BEHAVIOUR = ROOT / "configs" / "behaviours" / "pick_reorient_insert.yaml"
-SHAFT_HALF_LENGTH, HOLDER_TOP, CLEARANCE = 0.06, 0.06, 0.006
 
 
 def placements(count: int, seed: int = 20261204, any_yaw: bool = True) -> list[dict[str, Pose]]:
@@ -47,16 +47,6 @@ def placements(count: int, seed: int = 20261204, any_yaw: bool = True) -> list[d
             placement[frame] = Pose(position, rng.uniform(-np.pi, np.pi) if any_yaw else rng.uniform(min(yaws), max(yaws)))
         drawn.append(placement)
     return drawn
-
-
-def inserted(signals, holder: Pose) -> tuple[bool, str]:
-    """Whether the shaft ends in the hole, and how it ends (mm and degrees, holder frame)."""
-    end = {name: values[-1] for name, values in signals.columns.items()}
-    local = holder.from_base(np.array([[end["shaft_x"], end["shaft_y"], end["shaft_z"]]]))[0]
-    tilt = np.degrees(end["shaft_tilt"])
-    bottom = end["shaft_z"] - SHAFT_HALF_LENGTH * np.cos(end["shaft_tilt"])
-    ok = bottom < HOLDER_TOP and abs(local[0]) < CLEARANCE and abs(local[1]) < CLEARANCE and tilt < 3.0
-    return bool(ok), f"({1000 * local[0]:+.1f}, {1000 * local[1]:+.1f}) mm, tilt {tilt:.1f} deg"
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -175,7 +175,7 @@ def run_one(problem: str, method: str, seed: int) -> dict:
         "robustness": robustness,
         "best_x": best_x,
         "processor": processor(),
-    }
+    } | ({"inserted": [trial.get("inserted") for trial in trials]} if any(trial.get("inserted") is not None for trial in trials) else {})
 
 
 def processor() -> str:
@@ -234,14 +234,21 @@ def _learning_digest(demos: Path, states: int) -> str:
 
 
 def _run_tool(task) -> tuple[list[dict], float]:
+    """The run's trials (each with `inserted`, the physical check of a contact task's trial, or
+    None where there is none) and the unoptimised skill's robustness."""
     import tempfile
 
-    from stl_lfd.optim import finish_run, start_run
+    from benchmarks.physical import holder_pose, is_contact_task, physically_inserted
+    from stl_lfd.optim import RunDirectory, finish_run, start_run
 
     with tempfile.TemporaryDirectory() as folder:
         prepared = start_run(task, Path(folder) / "run")
         finish_run(prepared)
         trials = [json.loads(line) for line in (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()]
+        contact, run = is_contact_task(task), RunDirectory(Path(folder) / "run")
+        for trial in trials:
+            signals = run.recorded_signals(trial["trial"]) if contact else None
+            trial["inserted"] = None if signals is None else physically_inserted(signals, holder_pose(task))
         return trials, prepared.summary.initial_robustness
 
 
@@ -389,11 +396,30 @@ def summarise(problems: list[str], methods: list[str], seeds: list[int] | None =
                     "optimiser s/trial": f"{statistics.median(r['optimizer_seconds'] for r in runs):.2f}",
                     "rollout s/trial": f"{statistics.median(r['rollout_seconds'] for r in runs):.2f}",
                 }
+                | _physical_columns(runs)
             )
     for method, (satisfied, total) in totals.items():
         if total:
             rows.append({"problem": "all", "method": method, "satisfied": f"{satisfied}/{total} ({100 * satisfied / total:.0f} %)"})
     return rows
+
+
+def _physical_columns(runs: list[dict]) -> dict[str, str]:
+    """For runs of a contact task checked physically (`inserted` per trial): how many runs' best
+    trial is satisfied and physically inserted, and over all their trials how often the spec's
+    verdict agrees with the check."""
+    checked = [r for r in runs if "inserted" in r]
+    if not checked:
+        return {}
+    best_inserted, agree, total = 0, 0, 0
+    for r in checked:
+        values = [(value, inside) for value, inside in zip(r["robustness"], r["inserted"]) if value is not None and inside is not None]
+        if values:
+            best_value, best_inside = max(values, key=lambda pair: pair[0])
+            best_inserted += best_value > 0 and best_inside
+        agree += sum((value > 0) == inside for value, inside in values)
+        total += len(values)
+    return {"satisfied & inserted": f"{best_inserted}/{len(checked)}", "verdict agrees": f"{agree}/{total} trials"}
 
 
 def paired_firsts(problems: list[str], methods: list[str], seeds: list[int] | None = None, reference: str = "stl", results: Path = RESULTS) -> list[dict]:
@@ -416,7 +442,20 @@ def paired_firsts(problems: list[str], methods: list[str], seeds: list[int] | No
     return rows
 
 
-COLUMNS = ("problem", "budget", "search best", "method", "seeds", "satisfied", "median first", "median best", "optimiser s/trial", "rollout s/trial")
+COLUMNS = (
+    "problem",
+    "budget",
+    "search best",
+    "method",
+    "seeds",
+    "satisfied",
+    "satisfied & inserted",
+    "verdict agrees",
+    "median first",
+    "median best",
+    "optimiser s/trial",
+    "rollout s/trial",
+)
 
 
 def print_table(problems: list[str], methods: list[str], seeds: list[int] | None = None, markdown: bool = False, results: Path = RESULTS) -> None:

@@ -43,3 +43,15 @@ def test_earlier_codes_records_are_tabled_under_their_label_and_never_run(tmp_pa
         main(["--problems", "avoid", "--methods", "stl@step6", "--results", str(path)])
     assert "use it with --table" in capsys.readouterr().err
     assert path.read_text().count("\n") == 2  # nothing ran
+
+
+def test_a_contact_problems_runs_are_counted_against_the_physical_check(tmp_path):
+    checked = [
+        _record("phi3_strict_final", "plan", 0, 1) | {"robustness": [0.01, -0.02, 0.02], "inserted": [True, False, False]},
+        _record("phi3_strict_final", "plan", 1, 2) | {"robustness": [-0.01, 0.03, None], "inserted": [False, True, None]},
+    ]
+    path = tmp_path / "suite.jsonl"
+    path.write_text("".join(json.dumps(record) + "\n" for record in checked))
+    row = summarise(["phi3_strict_final"], ["plan"], results=path)[0]
+    # seed 0's best (0.02) is not inserted; seed 1's (0.03) is; trial 3 of seed 0 is satisfied but not inserted
+    assert row["satisfied & inserted"] == "1/2" and row["verdict agrees"] == "4/5 trials"

@@ -1,0 +1,40 @@
+"""The benchmarks' physical check of a contact task's trial, on hand-made recordings."""
+
+import numpy as np
+import pytest
+
+from benchmarks.physical import flung, physically_inserted, shaft_end
+from stl_lfd.poses import Pose
+from stl_lfd.signals import SignalTable
+
+HOLDER = Pose((0.55, 0.20, 0.04), 0.3)
+
+
+def recording(end, tilt=0.0, jump=False):
+    """The shaft from (0.45, -0.25, 0.08) to `end` in 10 s (or in one sample when `jump`)."""
+    times = np.linspace(0.0, 10.0, 1001)
+    phase = (times >= 5.0).astype(float) if jump else times / 10.0
+    start = np.array([0.45, -0.25, 0.08])
+    path = start + phase[:, None] * (np.asarray(end) - start)
+    columns = {f"shaft_{axis}": path[:, index] for index, axis in enumerate("xyz")}
+    columns |= {"holder_x": np.full(times.size, 0.55), "holder_y": np.full(times.size, 0.20), "holder_z": np.full(times.size, 0.04)}
+    columns["shaft_tilt"] = np.full(times.size, tilt)
+    return SignalTable(times, columns, source="made")
+
+
+@pytest.mark.parametrize(
+    "end, tilt, jump, where, inside",
+    [
+        ((0.553, 0.198, 0.08), 0.0, False, "inserted", True),  # upright, 3 mm off the axis, bottom on the table
+        ((0.553, 0.198, 0.08), 0.0, True, "inserted", False),  # got there at 9 m/s: flung
+        ((0.553, 0.198, 0.08), 0.1, False, "other", False),  # 6 degrees off upright
+        ((0.55, 0.20, 0.14), 0.0, False, "other", False),  # standing on the rim
+        ((0.52, 0.20, 0.08), 0.0, False, "other", False),  # beside the hole
+        ((0.80, 0.20, 0.03), 1.57, False, "thrown", False),  # off the table
+    ],
+)
+def test_where_the_shaft_ends(end, tilt, jump, where, inside):
+    signals = recording(end, tilt, jump)
+    assert shaft_end(signals, HOLDER) == where
+    assert flung(signals) == jump
+    assert physically_inserted(signals, HOLDER) == inside
