@@ -69,7 +69,7 @@ def draw_objects(axes, run: RunData, across: str, up: str) -> None:
     """The fixed frame objects' outlines in the view (`across`, `up`), filled light grey."""
     for index, item in enumerate(fixed_frame_objects(run)):
         hull = outline(corners(item)[:, [AXES[across], AXES[up]]])
-        label = "objects (holder, rails)" if index == 0 else None
+        label = "objects (outlines)" if index == 0 else None
         axes.add_patch(Polygon(hull, closed=True, facecolor=OBJECT_COLOR, alpha=0.25, edgecolor=OBJECT_COLOR, lw=0.8, zorder=2, label=label))
 
 
