@@ -458,23 +458,30 @@ COLUMNS = (
 )
 
 
+def shown_columns(rows: list[dict]) -> tuple[str, ...]:
+    """`COLUMNS` without the physical check's, when no row has them (no contact problem)."""
+    optional = ("satisfied & inserted", "verdict agrees")
+    return tuple(column for column in COLUMNS if column not in optional or any(column in row for row in rows))
+
+
 def print_table(problems: list[str], methods: list[str], seeds: list[int] | None = None, markdown: bool = False, results: Path = RESULTS) -> None:
     rows = summarise(problems, methods, seeds, results)
+    columns = shown_columns(rows)
     if markdown:
-        print("| " + " | ".join(COLUMNS) + " |")
-        print("|" + "---|" * len(COLUMNS))
+        print("| " + " | ".join(columns) + " |")
+        print("|" + "---|" * len(columns))
         for row in rows:
-            print("| " + " | ".join(row.get(column, "") for column in COLUMNS) + " |")
+            print("| " + " | ".join(row.get(column, "") for column in columns) + " |")
         print("\nMedian first satisfied trial on the pairs both satisfy:\n")
         for row in paired_firsts(problems, methods, seeds, results=results):
             ours, theirs = row["reference"], row["against"]
             print(f"- {ours} against {theirs}: {row['pairs']} pairs, {ours} {row[ours]:g}, {theirs} {row[theirs]:g}")
         return
     table = Table(title="Optimiser suite: success within the budget, over seeds")
-    for column in COLUMNS:
+    for column in columns:
         table.add_column(column)
     for row in rows:
-        table.add_row(*(row.get(column, "") for column in COLUMNS))
+        table.add_row(*(row.get(column, "") for column in columns))
     Console().print(table)
 
 

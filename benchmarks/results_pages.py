@@ -17,7 +17,7 @@ import sys
 from collections import Counter, defaultdict
 from pathlib import Path
 
-from benchmarks.bench_suite import COLUMNS, METHODS, ROOT, SEARCH_RESULTS, _recorded, _search_note, paired_firsts, summarise
+from benchmarks.bench_suite import METHODS, ROOT, SEARCH_RESULTS, _recorded, _search_note, paired_firsts, shown_columns, summarise
 
 RESULTS_DIR = ROOT / "benchmarks" / "results"
 PAGES_DIR = ROOT / "docs" / "results"
@@ -36,8 +36,9 @@ def _seed_label(seeds: list[int]) -> str:
 
 def _table(problems: list[str], methods: list[str], seeds: list[int], results: Path) -> list[str]:
     rows = summarise(problems, methods, seeds, results)
-    lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
-    lines += ["| " + " | ".join(row.get(column, "") for column in COLUMNS) + " |" for row in rows]
+    columns = shown_columns(rows)
+    lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+    lines += ["| " + " | ".join(row.get(column, "") for column in columns) + " |" for row in rows]
     reference = next((method for method in REFERENCES if method in methods), None)
     pairs = paired_firsts(problems, methods, seeds, reference, results) if reference and len(methods) > 1 else []
     if pairs:

@@ -18,7 +18,7 @@ import warnings
 from contextlib import contextmanager
 from enum import Enum
 from pathlib import Path
-from typing import Iterator, Optional
+from typing import Any, Iterator, Optional
 
 import typer
 from typer.core import TyperArgument, TyperCommand
@@ -168,14 +168,21 @@ def robustness(
 
 @app.command(cls=_PlainUsage)
 def learn(
-    demos_dir: Path = typer.Argument(..., metavar="DEMOS_DIR", help="Folder of demonstration CSVs (t,x,y,z[,...]), or one CSV."),
+    demos_dir: Path = typer.Argument(
+        ..., metavar="DEMOS_DIR", help="Folder of demonstration CSVs (t,x,y,z[,...]), one CSV, or a folder of such folders (one per skill)."
+    ),
     states: int = typer.Option(6, "-K", "--states", help="Number of HSMM states K."),
     restarts: int = typer.Option(1, "--restarts", min=1, help="EM starts: k-bins, then random segmentations; the most likely model is kept."),
-    output: Path = typer.Option(Path("model.npz"), "-o", "--output", help="Model file to write (.npz)."),
+    output: Optional[Path] = typer.Option(
+        None,
+        "-o",
+        "--output",
+        help="Model file to write (.npz; default model.npz); for a folder of skills' folders, the folder of the models (default models).",
+    ),
     sample_period: Optional[float] = typer.Option(
         None, "--sample-period", help="Resample the demos to this period in seconds (default: their median period, at most 50 Hz)."
     ),
-    plot: Optional[Path] = typer.Option(None, "--plot", help="Also draw demos, states and retrieval into this PNG."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Also draw demos, states and retrieval into this PNG (one per skill: PLOT-SKILL.png)."),
     frames: Optional[str] = typer.Option(
         None, "--frames", help="Frames to learn in, comma-separated (default with frame sidecars: base and every frame they give)."
     ),
@@ -191,41 +198,87 @@ def learn(
     objects) give a task-parameterised model (TP-HSMM) that follows the objects: learned in the
     robot base frame and in each object's frame, retrieved for new object poses.
 
+    A folder that holds no CSV but folders of them (demos/: one folder per skill) learns every
+    skill, and writes one model per skill into the -o folder (models/NAME.npz); nothing is
+    written unless every skill is learned.
+
     Prints one row per state on stdout: mean position (base frame; for a TP-HSMM, at the
     demonstrations' first frame poses), duration mean and standard deviation in seconds, and
-    the most likely successor.
+    the most likely successor; with several skills, one table per skill under its name.
 
     Examples:
 
     \b
         stlopt learn demos/three_regions -o three_regions.npz --plot skill.png
         stlopt learn demos/insert -o insert.npz --frames shaft,holder
+        stlopt learn demos/
 
     One demonstration does not vary, so by itself it would give states the optimiser cannot
     move; --min-spread (auto) then widens every state to at least 5 mm and 5 degrees, and
     every duration to at least 10 % of its mean.
     """
-    from stl_lfd.files import atomic_output, check_output_file
-    from stl_lfd.hsmm import TPHSMM, demonstrated_skill, learn_from_folder, retrieve, save_model, summary_rows
+    from stl_lfd.files import check_output_file, check_output_folder
+    from stl_lfd.hsmm import demonstration_sets, summary_rows
     from stl_lfd.hsmm.spread import parse_min_spread
 
     with user_errors():
-        check_output_file(output, (".npz",), "model file")
+        sets = demonstration_sets(demos_dir)
+        if sets:
+            folder = check_output_folder(output if output is not None else Path("models"), "models folder")
+            targets = {path: folder / f"{path.name}.npz" for path in sets}
+        else:
+            targets = {demos_dir: check_output_file(output if output is not None else Path("model.npz"), (".npz",), "model file")}
         if plot is not None:
             check_output_file(plot, FIGURE_SUFFIXES, "figure")
         chosen = [name.strip() for name in frames.split(",")] if frames is not None else None
         floor = parse_min_spread(min_spread)
-        model, sequences = learn_from_folder(demos_dir, states, sample_period, chosen, restarts, floor)
-        save_model(model, output)
-        shown_model = demonstrated_skill(model, demos_dir)
-        if plot is not None:
-            from stl_lfd.report.skill import skill_figure
+        learned = [_learned_skill(path, states, sample_period, chosen, restarts, floor) for path in targets]  # all, before any is written
+        for (path, target), skill in zip(targets.items(), learned):
+            if sets:
+                target.parent.mkdir(parents=True, exist_ok=True)
+                print(f"# {path.name}")
+            _write_skill(skill, target, _skill_plot(plot, path.name) if sets else plot)
+            _print_summary(summary_rows(skill.shown), skill.model.signal_names_)
+            _report_learned(skill, target, states)
 
-            trajectory = retrieve(shown_model)
-            figure = skill_figure(sequences, shown_model.means_, shown_model.covars_, trajectory.positions, model.sample_period_, model.signal_names_)
-            with atomic_output(plot) as temporary:
-                figure.savefig(temporary, dpi=110)
-    _print_summary(summary_rows(shown_model), model.signal_names_)
+
+@dataclasses.dataclass(frozen=True)
+class _LearnedSkill:
+    model: Any  # HSMM or TPHSMM
+    sequences: list
+    shown: Any  # the model as its demonstrations show it (a TP-HSMM at their first poses)
+
+
+def _learned_skill(folder: Path, states: int, sample_period: float | None, frames: list[str] | None, restarts: int, floor) -> _LearnedSkill:
+    from stl_lfd.hsmm import demonstrated_skill, learn_from_folder
+
+    model, sequences = learn_from_folder(folder, states, sample_period, frames, restarts, floor)
+    return _LearnedSkill(model, sequences, demonstrated_skill(model, folder))
+
+
+def _skill_plot(plot: Path | None, name: str) -> Path | None:
+    """PLOT-NAME.png beside `plot`, for one of several skills."""
+    return None if plot is None else plot.with_name(f"{plot.stem}-{name}{plot.suffix}")
+
+
+def _write_skill(skill: _LearnedSkill, output: Path, plot: Path | None) -> None:
+    from stl_lfd.files import atomic_output
+    from stl_lfd.hsmm import retrieve, save_model
+
+    save_model(skill.model, output)
+    if plot is not None:
+        from stl_lfd.report.skill import skill_figure
+
+        shown = skill.shown
+        figure = skill_figure(skill.sequences, shown.means_, shown.covars_, retrieve(shown).positions, skill.model.sample_period_, skill.model.signal_names_)
+        with atomic_output(plot) as temporary:
+            figure.savefig(temporary, dpi=110)
+
+
+def _report_learned(skill: _LearnedSkill, output: Path, states: int) -> None:
+    from stl_lfd.hsmm import TPHSMM
+
+    model = skill.model
     learned_in = f", frames {', '.join(model.frame_names_)}" if isinstance(model, TPHSMM) else ""
     if model.min_spread is not None:
         spread = model.min_spread
@@ -233,7 +286,7 @@ def learn(
             f"states widened to at least {1000 * spread.position:g} mm and {math.degrees(spread.angle):g} degrees, durations to {100 * spread.duration:g} % of their means (--min-spread)",
             file=sys.stderr,
         )
-    count = f"{len(sequences)} demonstration{'s' if len(sequences) != 1 else ''}"
+    count = f"{len(skill.sequences)} demonstration{'s' if len(skill.sequences) != 1 else ''}"
     print(f"wrote {output} ({count}, K = {states}{learned_in}, {len(model.monitor_.history)} EM iterations)", file=sys.stderr)
 
 
@@ -454,8 +507,14 @@ def replay(
 
 @app.command(cls=_PlainUsage)
 def optimize(
-    task_file: Path = typer.Argument(..., metavar="TASK_FILE", help="Task file (YAML), e.g. configs/phi1.yaml."),
-    spec: Optional[Path] = typer.Option(None, "--spec", help="Use this STL spec instead of the task's."),
+    task_file: Optional[Path] = typer.Argument(
+        None, metavar="[TASK_FILE]", help="Task file (YAML), e.g. configs/phi1.yaml (default: the one in configs/ that names --spec)."
+    ),
+    spec: Optional[Path] = typer.Option(None, "--spec", help="Use this STL spec instead of the task's; alone, the task file that names it."),
+    demos: Optional[Path] = typer.Option(
+        None, "--demos", help="Without a task file for --spec: a default task on the skill learned from these demonstrations."
+    ),
+    model: Optional[Path] = typer.Option(None, "--model", help="Without a task file for --spec: a default task on this model file."),
     iterations: Optional[int] = IterationsOption,
     init: Optional[int] = InitOption,
     seed: Optional[int] = SeedOption,
@@ -482,18 +541,25 @@ def optimize(
     Algorithm 1 (probability of improvement on one GP of the robustness). Each trial is recorded in the run directory as it finishes; the final
     summary.json is printed on stdout.
 
+    Without a task file, --spec SPEC runs the task file in configs/ (beside the spec's folder)
+    that names SPEC; where none does, --demos DIR or --model FILE builds a default task (free
+    space, PyBullet, the means of every state but the first, every duration and the transition
+    band; method plan, 32 trials).
+
     Examples:
 
     \b
         stlopt optimize configs/phi1.yaml --seed 3 --out runs/phi1-seed3
         stlopt optimize configs/phi1.yaml --out runs/phi1-seed3 --resume -N 48
+        stlopt optimize --spec specs/phi2.stl
+        stlopt optimize --spec my.stl --demos demos/three_regions
     """
-    from stl_lfd.optim import Overrides, finish_run, load_task, resume_run, start_run
+    from stl_lfd.optim import Overrides, finish_run, resume_run, start_run
     from stl_lfd.optim.runs.resume import inputs_record
     from stl_lfd.progress import TrialPrinter
 
     with user_errors():
-        file_task = load_task(task_file)
+        file_task = _task_to_run(task_file, spec, demos, model)
         given = Overrides(
             spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None,
             workers=workers, command=_command(command, command_timeout, file_task.command), placements=_placements(file_task.scene, place),
@@ -506,12 +572,35 @@ def optimize(
             _check_command_for(task.backend, given.command)
             say = (lambda message: None) if quiet else (lambda message: print(message, file=sys.stderr))
             prepared = start_run(task, run_dir, say, inputs_record(file_task, given, task))
-    again = f"stlopt optimize {task_file} --out {run_dir} --resume"
+    skill = "".join(f" {option} {path}" for option, path in (("--demos", demos), ("--model", model)) if path is not None)
+    again = f"stlopt optimize {task_file or f'--spec {spec}{skill}'} --out {run_dir} --resume"
     with prepared, user_errors(on_interrupt=f"interrupted; the finished trials are kept. Continue with: {again}"):
         printer = TrialPrinter(prepared, quiet=quiet)
         summary = finish_run(prepared, printer.trial)
         printer.done(summary)
     print(json.dumps(summary.to_json(), indent=2))
+
+
+def _task_to_run(task_file: Path | None, spec: Path | None, demos: Path | None, model: Path | None):
+    """The task file's task; without one, the task file that names `spec`, or a default task
+    for `spec` on `demos` or `model` (`optim/default_task.py`)."""
+    from stl_lfd.optim import load_task
+    from stl_lfd.optim.default_task import default_task, task_file_naming
+
+    if task_file is not None:
+        if demos is not None or model is not None:
+            raise ConfigError("--demos and --model build a task without a task file; the task file names its skill")
+        return load_task(task_file)
+    if spec is None:
+        raise ConfigError("give a task file (e.g. configs/phi1.yaml), or --spec SPEC")
+    if not spec.is_file():
+        raise ConfigError(f"{spec}: no such spec file")
+    found = task_file_naming(spec) if demos is None and model is None else None
+    if found is not None:
+        shown = os.path.relpath(found) if found.is_relative_to(Path.cwd()) else found
+        print(f"using the task file {shown}, which names {spec}", file=sys.stderr)
+        return load_task(found)
+    return default_task(spec, demos, model)
 
 
 @app.command(cls=_PlainUsage)

@@ -39,6 +39,15 @@ def load_demos(folder: str | Path) -> list[SignalTable]:
     return demos
 
 
+def demonstration_sets(folder: str | Path) -> list[Path]:
+    """The sub-folders of `folder` that hold demonstration CSVs (one set of demonstrations per
+    skill, as `demos/` holds them), sorted by name, when `folder` holds no CSV itself; else none."""
+    folder = Path(folder)
+    if not folder.is_dir() or any(folder.glob("*.csv")):
+        return []
+    return sorted(path for path in folder.iterdir() if path.is_dir() and any(path.glob("*.csv")))
+
+
 def with_checked_orientation(demo: SignalTable) -> SignalTable:
     """`demo` with its orientation columns `qx, qy, qz, qw` (if any) checked, normalised and made
     continuous (`rotations.checked_quaternions`); all four or none."""
