@@ -45,6 +45,13 @@ def test_a_plausible_recording_passes():
         ),
         (recording(times=np.where(np.arange(221) == 50, 4.8, TIMES)), r"rec.csv:53: t = 5.1 s does not come after|rec.csv:52: t = 4.8 s"),
         (recording(force=np.where(np.arange(221) == 7, 5e4, 0.0)), r"rec.csv:9: a force of 5e\+04 N, above the 1000 N a recording may show"),
+        (recording(force=np.full(221, -50.0)), r"rec.csv:2: a force of -50 N; `force` is the norm of the contact force, never negative"),
+        (recording(tilt=np.full(221, 1e9)), r"rec.csv:2: tilt = 1e\+09, but the hand's tilt \(rad\) lies in \[0, 3.14159\]"),
+        (recording(tilt=np.full(221, -3.0)), r"rec.csv:2: tilt = -3, but the hand's tilt"),
+        (
+            recording(qx=np.zeros(221), qy=np.zeros(221), qz=np.zeros(221), qw=np.full(221, 10.0)),
+            r"rec.csv:2: the orientation qx, qy, qz, qw has norm 10; a rotation's quaternion has norm 1",
+        ),
     ],
 )
 def test_an_implausible_recording_is_refused_naming_the_file_and_row(signals, message):
@@ -57,3 +64,15 @@ def test_the_scene_may_raise_the_force_limit():
     strong = replace(SCENE, safety=replace(SCENE.safety, max_force=1e5))
     check_recorded(recording(force=np.full(221, 5e4)), REFERENCE, strong, 10)
     assert "max_force=100000.0" in repr(strong.safety) and "max_force" not in repr(SCENE.safety)  # old runs resume
+
+
+def test_the_objects_signals_are_checked_too():
+    scene = load_scene("pick_insert")
+    fine = {"shaft_x": np.full(221, 0.45), "shaft_y": np.full(221, -0.25), "shaft_z": np.full(221, 0.08), "shaft_held": np.zeros(221)}
+    check_recorded(recording(**fine), REFERENCE, scene, 10)
+    with pytest.raises(ImplausibleSignals, match=r"rec.csv:2: shaft at \(shaft_x=0.45, shaft_y=-0.25, shaft_z=9\) is more than 1 m outside"):
+        check_recorded(recording(**fine | {"shaft_z": np.full(221, 9.0)}), REFERENCE, scene, 10)
+    with pytest.raises(ImplausibleSignals, match=r"rec.csv:2: shaft_held = 3, but whether the fingers hold shaft \(1 or 0\) lies in \[0, 1\]"):
+        check_recorded(recording(**fine | {"shaft_held": np.full(221, 3.0)}), REFERENCE, scene, 10)
+    with pytest.raises(ImplausibleSignals, match=r"rec.csv:2: holder_tilt = 2, but holder's tilt \(rad\) lies in \[0, 1.5708\]"):
+        check_recorded(recording(**fine | {"holder_tilt": np.full(221, 2.0)}), REFERENCE, scene, 10)
