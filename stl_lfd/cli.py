@@ -25,7 +25,8 @@ from typer.core import TyperArgument, TyperCommand
 
 from stl_lfd.allocator import keep_freed_memory
 from stl_lfd.choices import SEMANTICS
-from stl_lfd.errors import ConfigError, ExecutionError, ModelError, StlLfdError
+from stl_lfd.errors import ConfigError, ExecutionError, ModelError, OutputError, StlLfdError
+from stl_lfd.limits import MAX_RESTARTS
 from stl_lfd.optim.methods import method_names
 from stl_lfd.sim.registry import DEFAULT_BACKEND, backend_names, backends_help
 
@@ -65,6 +66,7 @@ def _print_warning(message, category, filename, lineno, file=None, line=None) ->
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 SIGNAL_SUFFIXES = (".csv",)
 INTERRUPTED = 130  # what a shell reports for a process that SIGINT ended
+EXIT_SIGPIPE = 141  # and for one that wrote to a closed pipe
 PLACE_HELP = "Place an object frame of the scene: NAME=x,y[,z[,yaw]] (metres, yaw in radians; z and yaw default to the scene's). Repeat for several frames."
 COMMAND_HELP = "With --backend command: the executor to run, with {reference} and {signals} for the two CSV paths (no shell)."
 COMMAND_TIMEOUT_HELP = "Seconds after which the executor is stopped and the trial fails (default: the task's, or 600)."
@@ -101,6 +103,13 @@ def main() -> None:
     keep_freed_memory()
     try:
         app()
+    except BrokenPipeError:  # the reader went away (`stlopt retrieve M | head`): stop quietly, as Unix tools do
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # nothing more to flush at exit
+        sys.exit(EXIT_SIGPIPE)
+    except OSError as error:  # the output cannot be written (a full disk, /dev/full)
+        where = f" ({error.filename})" if error.filename else " (standard output)"
+        print(f"error: cannot write{where}: {error.strerror or error}", file=sys.stderr)
+        sys.exit(OutputError.exit_code)
     except SystemExit as stop:
         if stop.code == INTERRUPTED:
             sys.stdout.flush()
@@ -172,7 +181,7 @@ def learn(
         ..., metavar="DEMOS_DIR", help="Folder of demonstration CSVs (t,x,y,z[,...]), one CSV, or a folder of such folders (one per skill)."
     ),
     states: int = typer.Option(6, "-K", "--states", help="Number of HSMM states K."),
-    restarts: int = typer.Option(1, "--restarts", min=1, help="EM starts: k-bins, then random segmentations; the most likely model is kept."),
+    restarts: int = typer.Option(1, "--restarts", min=1, max=MAX_RESTARTS, help="EM starts: k-bins, then random segmentations; the most likely model is kept."),
     output: Optional[Path] = typer.Option(
         None,
         "-o",

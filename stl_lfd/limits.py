@@ -16,6 +16,13 @@ MAX_SEED = 2**32 - 1  # what numpy and torch accept
 MAX_STATES = 200  # HSMM states
 MAX_WORKERS = 256  # parallel trials of one run (one process each)
 MAX_PLACEMENTS = 64  # object placements a trial executes at (one rollout each)
+MAX_RESTARTS = 1000  # EM starts of one learning (each a full EM run)
+MAX_SYMMETRY = 360  # yaws under which an object looks the same (a 1-degree pattern)
+MAX_YAW = 4 * math.pi  # rad: a yaw beyond two turns either way is a unit mistake (degrees?)
+# The least spread a state may be widened to: beyond these it is no longer the demonstrated skill.
+MAX_SPREAD_POSITION = 1.0  # m
+MAX_SPREAD_ANGLE = math.pi  # rad
+MAX_SPREAD_DURATION = 10.0  # times the duration mean
 
 
 def samples_problem(duration: float | None, rate: float) -> str:

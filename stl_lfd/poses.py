@@ -16,6 +16,7 @@ import numpy as np
 
 import stl_lfd.rotations as rotations
 from stl_lfd.errors import ConfigError
+from stl_lfd.limits import MAX_YAW
 from stl_lfd.yamlfile import check_keys, number, vector
 
 BASE_FRAME = "base"  # the robot base frame: always at the origin, never placed
@@ -78,7 +79,10 @@ def parse_pose(data: Any, path: Path | str, where: str) -> Pose:
     check_keys(data, ("position", "yaw", "orientation"), path, where, required=("position",))
     position = vector(data["position"], 3, path, f"{where}.position")
     if "orientation" not in data:
-        return Pose(position, number(data.get("yaw", 0.0), path, f"{where}.yaw"))
+        yaw = number(data.get("yaw", 0.0), path, f"{where}.yaw")
+        if abs(yaw) > MAX_YAW:
+            raise ConfigError(f"{path}: '{where}.yaw' must be in radians, within two turns either way (got {yaw:g})")
+        return Pose(position, yaw)
     if "yaw" in data:
         raise ConfigError(f"{path}: '{where}' gives both 'yaw' and 'orientation'; give one")
     quaternion = np.array(vector(data["orientation"], 4, path, f"{where}.orientation"))
@@ -108,6 +112,8 @@ def parse_assignment(text: str, option: str, defaults: Mapping[str, Pose] | None
     shortest = 2 if defaults is not None else 3
     if not shortest <= len(values) <= 4 or not all(math.isfinite(v) for v in values):
         raise ConfigError(usage)
+    if len(values) == 4 and abs(values[3]) > MAX_YAW:
+        raise ConfigError(f"{option} {text}: the yaw must be in radians, within two turns either way (got {values[3]:g})")
     return name, pose_from_values(values, defaults[name] if defaults is not None else Pose())
 
 

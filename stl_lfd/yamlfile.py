@@ -64,6 +64,8 @@ def read_yaml(path: Path | str) -> dict[str, Any]:
             _remember_positions(str(path), root)
         finally:
             loader.dispose()
+    except RecursionError:
+        raise ConfigError(f"{path}: the YAML nests too deeply to read; is it the right file?") from None
     except yaml.YAMLError as error:
         mark = getattr(error, "problem_mark", None) or getattr(error, "context_mark", None)
         where = f":{mark.line + 1}:{mark.column + 1}" if mark is not None else ""

@@ -595,6 +595,83 @@ CASES = [
         {"s.yaml": "tasks: [t.yaml]\n", "t.yaml": task_text(), "f.txt": "x"},
     ),
     Case("report-sweep-options", ["report", "{case}", "--out", "{case}/r"], 5, "a sweep folder's report is its table and sweep.png", {"sweep.csv": "cell\n"}),
+    # Sizes and bounds a user can type, checked before any work
+    Case("learn-restarts-huge", ["learn", "{demos}", "--restarts", "99999999999999999999", "-o", "{case}/m.npz"], 2, "is not in the range 1<=x<=1000"),
+    Case("learn-spread-huge", ["learn", "{demos}", "--min-spread", "1e9m,400deg,10000%", "-o", "{case}/m.npz"], 6, "at most 1m, 180deg and 1000%"),
+    Case(
+        "learn-sidecar-yaw-huge",
+        ["learn", "{case}", "-o", "{case}/m.npz"],
+        5,
+        "'frames.shaft.yaw' must be in radians, within two turns either way (got 1e+308)",
+        {
+            "demo_01.csv": "t,x,y,z\n0,0.4,0,0.3\n0.1,0.41,0,0.3\n0.2,0.42,0,0.3\n",
+            "demo_01.frames.yaml": "frames:\n  shaft: {position: [0.4, 0, 0.05], yaw: 1e308}\n",
+        },
+    ),
+    Case(
+        "scene-symmetry-huge",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml", "--backend", "kinematic"],
+        5,
+        "'frames.cup.symmetry' must be a whole number of yaws that give the same objects, 1 to 360",
+        {
+            "s.yaml": "description: d\nobjects:\n  - {name: a, shape: box, size: [0.01, 0.01, 0.01], position: [0.5, 0, 0.02]}\n"
+            "frames:\n  cup: {position: [0.5, 0, 0.02], objects: [a], symmetry: 1000000000}\n"
+        },
+    ),
+    Case(
+        "scene-into-no-hole",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml", "--backend", "kinematic"],
+        5,
+        "'frames.peg.into' must name another frame with a 'rim'",
+        {
+            "s.yaml": "description: d\nobjects:\n  - {name: a, shape: box, size: [0.01, 0.01, 0.01], position: [0.5, 0, 0.02], mass: 0.1}\n"
+            "frames:\n  peg: {position: [0.5, 0, 0.02], objects: [a], into: cup}\n"
+        },
+    ),
+    Case(
+        "place-above-workspace",
+        ["rollout", str(ROOT / "configs" / "behaviours" / "pick_insert.yaml"), "--backend", "kinematic", "--place", "holder=0.6,0.2,5"],
+        5,
+        "holder at z = 5 is above the scene's workspace (its top at z = 0.6); heights are in metres",
+    ),
+    Case(
+        "place-yaw-in-degrees",
+        ["rollout", "{model}", "--scene", "pick_insert", "--backend", "kinematic", "--place", "holder=0.6,0.2,0.04,90"],
+        5,
+        "the yaw must be in radians",
+    ),
+    task_case("task-scene-folder", "t.yaml:8:1: 'scene' names ./, which is a folder", scene="./"),
+    Case("task-yaml-too-deep", ["optimize", "{case}/t.yaml"], 5, "the YAML nests too deeply to read", {"t.yaml": "x: " + "[" * 20000 + "]" * 20000 + "\n"}),
+    Case("optimize-nothing-given", ["optimize"], 5, "give a task file (e.g. configs/phi1.yaml), or --spec SPEC"),
+    Case(
+        "optimize-spec-without-task",
+        ["optimize", "--spec", "{case}/s.stl"],
+        5,
+        "no task file in configs/ names this spec; give a task file, or --demos DIR",
+        {"s.stl": "phi := F x > 0\n"},
+    ),
+    Case(
+        "optimize-task-and-demos",
+        ["optimize", "{case}/t.yaml", "--demos", "{demos}"],
+        5,
+        "--demos and --model build a task without a task file",
+        {"t.yaml": task_text()},
+    ),
+    Case(
+        "optimize-default-task-object-skill",
+        ["optimize", "--spec", "{case}/s.stl", "--demos", str(ROOT / "demos" / "insert")],
+        5,
+        "the demonstrations have frame sidecars; a skill that follows objects needs a task file",
+        {"s.stl": "phi := F x > 0\n"},
+    ),
+    tell_case("tell-tilt-huge", recording(tilt=lambda i, t: 1e9), "tilt = 1e+09, but the hand's tilt (rad) lies in [0, 3.14159]"),
+    tell_case("tell-tilt-negative", recording(tilt=lambda i, t: -3), "tilt = -3, but the hand's tilt"),
+    tell_case("tell-force-negative", recording(force=lambda i, t: -50), "a force of -50 N; `force` is the norm of the contact force, never negative"),
+    tell_case(
+        "tell-quaternion-norm-10",
+        recording(qx=lambda i, t: 0, qy=lambda i, t: 0, qz=lambda i, t: 0, qw=lambda i, t: 10),
+        "the orientation qx, qy, qz, qw has norm 10",
+    ),
 ]
 
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from stl_lfd.errors import ModelError
+from stl_lfd.limits import MAX_SPREAD_ANGLE, MAX_SPREAD_DURATION, MAX_SPREAD_POSITION
 from stl_lfd.hsmm.orientation import Coordinates
 
 
@@ -80,6 +81,9 @@ def parse_min_spread(text: str, option: str = "--min-spread") -> MinimumSpread |
             values.append(number * units[unit])
     if len(values) != 3:
         raise ModelError(f"{option} {text}: give auto, none, or a position, an angle and a share of the duration, with units, such as 5mm,5deg,10%")
+    limits = (MAX_SPREAD_POSITION, MAX_SPREAD_ANGLE, MAX_SPREAD_DURATION)
+    if any(value > limit for value, limit in zip(values, limits)):
+        raise ModelError(f"{option} {text}: at most 1m, 180deg and 1000% (a wider state is no longer the demonstrated skill)")
     return MinimumSpread(*values)
 
 

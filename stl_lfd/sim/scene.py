@@ -275,6 +275,10 @@ class Scene:
                 raise ConfigError(f"{source}: {name}: a scene turns its objects about z only; give a yaw, not an orientation")
             check_area(frames[name], pose, source)
             self._check_above_floor(frames[name], pose, source)
+            if self.safety is not None and pose.position[2] > self.safety.upper[2]:
+                raise ConfigError(
+                    f"{source}: {name} at z = {pose.position[2]:g} is above the scene's workspace (its top at z = {self.safety.upper[2]:g}); heights are in metres"
+                )
 
     def _check_above_floor(self, frame: SceneFrame, pose: Pose, source: str) -> None:
         """ConfigError when placing `frame` at `pose` puts one of its objects' centres below the floor."""

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from stl_lfd.errors import ConfigError
+from stl_lfd.limits import MAX_SYMMETRY
 from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment, parse_pose, pose_from_values
 from stl_lfd.sim.impedance import PANDA_TORQUE_LIMITS
 from stl_lfd.sim.safety import Safety
@@ -72,6 +73,8 @@ def scene_reference(text: str, source: Path, kind: str) -> str:
         resolved = Path(text)
     if not resolved.exists():
         raise ConfigError(f"{source}: 'scene' names {text}, which does not exist (paths are relative to the {kind} file)")
+    if not resolved.is_file():
+        raise ConfigError(f"{source}: 'scene' names {text}, which is a folder; give a scene .yaml file or a built-in scene's name")
     return str(resolved.resolve())
 
 
@@ -157,9 +160,10 @@ def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
             raise ConfigError(f"{path}: '{where}.area' must have lower < upper in x and y")
         area = (lower, upper)
     symmetry = data.get("symmetry", 1)
-    if isinstance(symmetry, bool) or not isinstance(symmetry, int) or symmetry < 1:
+    if isinstance(symmetry, bool) or not isinstance(symmetry, int) or not 1 <= symmetry <= MAX_SYMMETRY:
         raise ConfigError(
-            f"{path}: '{where}.symmetry' must be a whole number of yaws that give the same objects (1: none, 2: a half turn, 4: a quarter turn; got {shown(symmetry)})"
+            f"{path}: '{where}.symmetry' must be a whole number of yaws that give the same objects, 1 to {MAX_SYMMETRY} "
+            f"(1: none, 2: a half turn, 4: a quarter turn; got {shown(symmetry)})"
         )
     rim = number(data["rim"], path, f"{where}.rim") if "rim" in data else None
     into = data.get("into")
