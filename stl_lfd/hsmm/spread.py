@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from stl_lfd.errors import ModelError
-from stl_lfd.limits import MAX_SPREAD_ANGLE, MAX_SPREAD_DURATION, MAX_SPREAD_POSITION
 from stl_lfd.hsmm.orientation import Coordinates
+from stl_lfd.limits import MAX_SPREAD_ANGLE, MAX_SPREAD_DURATION, MAX_SPREAD_POSITION
 
 
 @dataclass(frozen=True)
