@@ -383,6 +383,13 @@ CASES = [
         for name, (damage, message) in DAMAGES.items()
         if name not in ("empty-trials", "short-x", "inputs-garbage")
     ],
+    Case(
+        "damaged-resume-one-signal-file",
+        ["optimize", "{task}", "--out", "{case}/run", "--resume", "-N", "5"],
+        9,
+        "the recorded signals of finished trials are missing (signals/trial-0002.csv); the run cannot go on without them",
+        damage=lambda run: (run / "signals" / "trial-0002.csv").unlink(),
+    ),
     Case("damaged-replay-empty-trials", ["replay", "{case}/run", "--video", "{case}/v.mp4"], 9, "no successful trial yet", damage=DAMAGES["empty-trials"][0]),
     # --- replay and report ------------------------------------------------------------------
     Case("replay-trial-negative", ["replay", "{run}", "--trial", "-1", "--video", "{case}/v.mp4"], 9, "no trial -1 (the run has trials 1 to 3"),

@@ -34,6 +34,8 @@ def index_page(run: RunData, figures: list[tuple[str, Path]]) -> str:
     left_out = explain.left_out(run, {name for name, _ in figures})
     left_out_items = "\n".join(f"<li><b>{escape(name)}</b>: {escape(why)}</li>" for name, why in left_out)
     left_out_section = f"<p>Not drawn for this run:</p><ul>\n{left_out_items}\n</ul>" if left_out else ""
+    if run.missing_signals:
+        left_out_section += f"<p>Missing from the run directory, so left out of every figure: {escape(', '.join(run.missing_signals))}.</p>"
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>stlopt report: {escape(run.task.name)}</title>
 <style>{STYLE}</style></head>

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,6 +19,10 @@ from stl_lfd.sim import Scene, load_scene
 from stl_lfd.stl import ast, load_spec
 from stl_lfd.stl.regions import region_boxes
 from stl_lfd.stl.thresholds import Threshold, signal_thresholds
+
+
+class MissingSignalsWarning(UserWarning):
+    """A run directory lacks the signal files of some of its finished trials."""
 
 
 @dataclass(frozen=True)
@@ -38,7 +43,9 @@ class RunData:
         trials: finished trials in order; signals: trial number -> recorded signals (0 is the
         unoptimised skill); regions: name -> {signal: (lo, hi)}; constraints: the temporal
         use of each region by the spec; thresholds: signal -> the numbers the spec compares it
-        with; scene: the scene at the run's placement (None with several placements).
+        with; scene: the scene at the run's placement (None with several placements);
+        missing_signals: the run's signal files that should be there and are not (a damaged
+        run: their trials are left out of the figures).
     """
 
     path: Path
@@ -53,6 +60,7 @@ class RunData:
     tracking: RunTrackingRecord | None = None  # tracking.json, when the run learned how its robot tracks
     thresholds: dict[str, list[Threshold]] = field(default_factory=dict)
     scene: Scene | None = None
+    missing_signals: tuple[str, ...] = ()  # signal files of finished trials that are not there (relative paths)
 
     @property
     def best(self) -> Trial | None:
@@ -79,6 +87,9 @@ def load_run(path: Path) -> RunData:
         order = [step.name for step in load_behaviour(task.behaviour).skills]
         models = {name: models[name] for name in order if name in models}
     trials = run.trials()
+    missing = tuple(str(path.relative_to(run.path)) for path in run.missing_signals())
+    if missing:
+        warnings.warn(f"{path}: the recorded signals {', '.join(missing)} are missing; the figures leave their trials out", MissingSignalsWarning, stacklevel=2)
     recorded = {number: run.recorded_signals(number) for number in [0] + [trial.trial for trial in trials]}
     signals = {number: table for number, table in recorded.items() if table is not None}
     spec = load_spec(task.spec)
@@ -95,6 +106,7 @@ def load_run(path: Path) -> RunData:
         tracking=read_tracking(path),
         thresholds=signal_thresholds(spec),
         scene=_placed_scene(task),
+        missing_signals=missing,
     )
 
 

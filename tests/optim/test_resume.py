@@ -41,9 +41,11 @@ def test_the_same_command_plus_resume_works_for_every_option(tmp_path, learned_m
     ]
     first = runner.invoke(app, ["optimize", str(task)] + options)
     assert first.exit_code == 0, first.stderr
+    summary = (tmp_path / "run" / "summary.json").read_bytes()
     again = runner.invoke(app, ["optimize", str(task)] + options + ["--resume"])
     assert again.exit_code == 0, again.stderr
     assert "the run is complete (3 trials" in again.stderr
+    assert (tmp_path / "run" / "summary.json").read_bytes() == summary  # nothing ran, nothing changed
     longer = runner.invoke(app, ["optimize", str(task)] + options[:2] + ["-N", "4"] + options[4:] + ["--resume"])
     assert longer.exit_code == 0, longer.stderr
     assert json.loads(longer.stdout)["trials"] == 4

@@ -183,3 +183,16 @@ def test_an_objects_outline_is_its_turned_box_seen_from_a_side():
         and np.allclose(np.sort(np.unique(np.round(top[:, 0], 6))), [0.47, 0.53])
         and np.allclose(np.sort(np.unique(np.round(top[:, 1], 6))), [0.19, 0.21])
     )
+
+
+@pytest.mark.slow
+def test_a_missing_signal_file_is_named_not_silently_dropped(run_dir, tmp_path):
+    import shutil
+
+    damaged = tmp_path / "damaged"
+    shutil.copytree(run_dir, damaged)
+    (damaged / "signals" / "trial-0002.csv").unlink()
+    result = runner.invoke(app, ["report", str(damaged), "--out", str(tmp_path / "report")])
+    assert result.exit_code == 0, result.stderr
+    assert "warning: " in result.stderr and "the recorded signals signals/trial-0002.csv are missing; the figures leave their trials out" in result.stderr
+    assert "Missing from the run directory, so left out of every figure: signals/trial-0002.csv." in page_text(tmp_path / "report" / "index.html")

@@ -210,6 +210,12 @@ class RunDirectory:
     def clear_pending(self) -> None:
         (self.path / PENDING_FILE).unlink(missing_ok=True)
 
+    def missing_signals(self) -> list[Path]:
+        """The signal files the run should hold and does not: the unoptimised skill's (once it
+        has a summary) and each successful trial's."""
+        expected = ([0] if (self.path / SUMMARY_FILE).is_file() else []) + [trial.trial for trial in self.trials() if trial.status == "ok"]
+        return [path for path in map(self.signals_path, expected) if not path.is_file()]
+
     def signals_path(self, trial: int) -> Path:
         return self.path / SIGNALS_DIR / (f"trial-{trial:04d}.csv" if trial > 0 else "initial.csv")
 

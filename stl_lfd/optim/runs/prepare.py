@@ -142,6 +142,12 @@ def _reopen(run: RunDirectory, out: Path, trials: int | None, file_task: Task | 
     pending = run.pending()
     if pending is not None:
         raise RunError(f"{out}: trial {pending.trial} was handed out by stlopt ask and is not told yet; tell its signals first (stlopt tell {out} SIGNALS.csv)")
+    missing = run.missing_signals()
+    if missing:
+        listed = ", ".join(str(path.relative_to(run.path)) for path in missing)
+        raise RunError(
+            f"{out}: the recorded signals of finished trials are missing ({listed}); the run cannot go on without them: restore them, or start a new run"
+        )
     return prepared_from(run, task)
 
 
