@@ -129,3 +129,22 @@ def test_ctrl_c_keeps_the_trials_and_dies_by_sigint(tmp_path, learned_model_file
     assert f"Continue with: stlopt optimize {task} --out {run} --resume" in err
     kept = len((run / "trials.jsonl").read_text().splitlines())
     assert kept >= 3 and "Traceback" not in err
+
+
+def test_staging_folders_of_killed_runs_are_removed_by_the_next_run(tmp_path):
+    import time
+
+    from stl_lfd.optim.runs.lock import RunLock
+    from stl_lfd.optim.runs.staging import ABANDONED_AFTER, remove_abandoned
+
+    long_ago = time.time() - 2 * ABANDONED_AFTER
+    abandoned, building, fresh = (tmp_path / f".run.{name}" for name in ("k1ll3d", "bu1ld", "n3w"))
+    for folder in (abandoned, building, fresh):
+        folder.mkdir()
+        (folder / "task.yaml").write_text("name: x\n")
+    held = RunLock.acquire(building, building)  # another process building its run
+    for folder in (abandoned, building):
+        os.utime(folder, (long_ago, long_ago))
+    remove_abandoned(tmp_path / "run")
+    held.release()
+    assert not abandoned.exists() and building.exists() and fresh.exists()

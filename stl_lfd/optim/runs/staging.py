@@ -3,11 +3,13 @@ that it appears complete (task, models, initial signals, summary) or not at all.
 
 from __future__ import annotations
 
+import glob
 import json
 import os
 import re
 import shutil
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +25,22 @@ from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Task
 from stl_lfd.signals import SignalTable, write_signal_csv
 
+ABANDONED_AFTER = 60.0  # s: a staging folder this old and unlocked was left by a killed process
+
+
+def remove_abandoned(destination: Path) -> None:
+    """Remove the staging folders of `destination` that killed processes left behind (their
+    lock free, untouched for `ABANDONED_AFTER` seconds); one being built is locked and kept."""
+    for folder in destination.parent.glob(f".{glob.escape(destination.name)}.*"):
+        if not folder.is_dir() or time.time() - folder.stat().st_mtime < ABANDONED_AFTER:
+            continue
+        try:
+            lock = RunLock.acquire(folder, folder)
+        except StlLfdError:  # in use, or not ours to write
+            continue
+        lock.release()
+        shutil.rmtree(folder, ignore_errors=True)
+
 
 class StagedRun:
     """A run directory being built under a temporary name beside `path`, locked by this process.
@@ -37,6 +55,7 @@ class StagedRun:
     def __init__(self, destination: Path) -> None:
         self.destination = Path(destination)
         check_new_run_path(self.destination)
+        remove_abandoned(self.destination)
         try:
             self.destination.parent.mkdir(parents=True, exist_ok=True)
             self.path = Path(tempfile.mkdtemp(prefix=f".{self.destination.name}.", dir=self.destination.parent))
