@@ -23,6 +23,8 @@ class Summary:
         complete: whether the budget (`budget` trials) is spent.
         wall_seconds: time spent by the run, over all its resumptions.
         parameters: the names of the optimised parameters; `best_parameters` their best values.
+        executed_by: how the trials were executed: the backend's name, `command: CMD` (an
+            executor the run started), or `stlopt ask/tell` (executed elsewhere and told).
     """
 
     name: str
@@ -46,6 +48,7 @@ class Summary:
     wall_seconds: float = 0.0
     parameters: tuple[str, ...] = ()
     best_parameters: dict[str, float] | None = None
+    executed_by: str = ""
 
     @classmethod
     def of(
@@ -56,8 +59,10 @@ class Summary:
         history: list[Trial],
         wall_seconds: float,
         initial_components: dict[str, float] | None = None,
+        executed_by: str | None = None,
     ) -> "Summary":
-        """The summary of `history`, the trials of `task` so far."""
+        """The summary of `history`, the trials of `task` so far (`executed_by`: default, as the
+        task executes them, `execution_of`)."""
         best = best_trial(history)
         satisfied = [trial.trial for trial in history if trial.satisfied]
         return cls(
@@ -82,6 +87,7 @@ class Summary:
             wall_seconds=round(wall_seconds, 3),
             parameters=tuple(space.names),
             best_parameters=space.as_dict(best.x) if best else None,
+            executed_by=executed_by or execution_of(task),
         )
 
     def to_json(self) -> dict[str, Any]:
@@ -100,3 +106,14 @@ class Summary:
         values = {key: value for key, value in data.items() if key in known}
         values["parameters"] = tuple(values.get("parameters", ()))
         return cls(**values)
+
+
+ASK_TELL = "stlopt ask/tell"
+
+
+def execution_of(task: Task) -> str:
+    """How `task` executes its trials when the run executes them: the backend's name, or
+    `command: CMD` for an executor command."""
+    if task.backend == "command" and task.command is not None:
+        return f"command: {task.command.shown()}"
+    return task.backend

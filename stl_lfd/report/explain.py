@@ -56,7 +56,7 @@ def task_rows(run: RunData) -> list[tuple[str, str]]:
     return [
         ("spec", _shown_path(task.spec)),
         ("robustness", semantics_in_words(run) + "; above 0 satisfies the spec"),
-        ("execution", f"{task.backend} backend, scene {task.scene}{placements}; {task.duration:g} s at {task.rate:g} Hz"),
+        ("execution", f"{_executed_by(run)}, scene {task.scene}{placements}; {task.duration:g} s at {task.rate:g} Hz"),
         ("optimised", "; ".join(optimised_in_words(run))),
         ("parameters", f"{run.space.dimension}: {', '.join(run.space.names)}"),
         ("method", f"{_optimizer(run).phases}; seed {task.optimizer.seed}"),
@@ -109,6 +109,24 @@ def _states(components: tuple[int, ...] | str) -> str:
     return ("state " if len(components) == 1 else "states ") + ", ".join(str(state) for state in components)
 
 
+def _executed_by(run: RunData) -> str:
+    """How the run's trials were executed, in words."""
+    from stl_lfd.optim.summary import ASK_TELL
+
+    executed_by = run.summary.executed_by or run.task.backend
+    if executed_by == ASK_TELL:
+        return "executed elsewhere and told (stlopt ask/tell)"
+    if executed_by.startswith("command: "):
+        return f"executed by the command {executed_by.removeprefix('command: ')}"
+    return f"{executed_by} backend"
+
+
+def _simulated(run: RunData) -> bool:
+    """Whether the run's trials were simulated by stlopt (a replay shows what ran)."""
+    executed_by = run.summary.executed_by or run.task.backend
+    return executed_by in ("pybullet", "mujoco", "kinematic")
+
+
 def commands(run: RunData) -> list[tuple[str, str]]:
     """`(command, what it does)`: watch the best trial, continue the run, redraw this report
     (paths relative to the working directory when the run lies in it, else all absolute)."""
@@ -117,9 +135,9 @@ def commands(run: RunData) -> list[tuple[str, str]]:
     found = []
     if run.best is not None:
         trial = run.best.trial
-        found.append(
-            (f"stlopt replay {path} --trial {trial}", f"watch the best trial again (in a window, or without a display as {path}/replay-trial-{trial}.mp4)")
-        )
+        where = f"in a window, or without a display as {path}/replay-trial-{trial}.mp4"
+        what = f"watch the best trial again ({where})" if _simulated(run) else f"simulate the best trial ({where}); what ran on the robot is not replayed"
+        found.append((f"stlopt replay {path} --trial {trial}", what))
     task_file = _task_file(run, relative)
     if task_file is not None:
         more = max(run.summary.budget, run.summary.trials) * 2

@@ -72,6 +72,13 @@ def test_an_ask_tell_loop_gives_the_trials_of_optimize(tmp_path, learned_model_f
     asked, optimized = (json.loads((tmp_path / name / "summary.json").read_text()) for name in ("asked", "optimized"))
     for key in ("initial_robustness", "best_robustness", "best_trial", "trials", "complete"):
         assert asked[key] == optimized[key]
+    assert asked["executed_by"] == "stlopt ask/tell" and optimized["executed_by"] == "kinematic"  # the task's backend did not run the trials
+    from stl_lfd.report import explain
+    from stl_lfd.report.run_data import load_run
+
+    run = load_run(tmp_path / "asked")
+    assert dict(explain.task_rows(run))["execution"].startswith("executed elsewhere and told (stlopt ask/tell)")
+    assert "what ran on the robot is not replayed" in explain.commands(run)[0][1]
     assert ask(tmp_path / "asked") is None
 
 

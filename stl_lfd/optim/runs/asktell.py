@@ -30,7 +30,7 @@ from stl_lfd.optim.runs.recorder import Recorder
 from stl_lfd.optim.runs.records import Pending
 from stl_lfd.optim.runs.resume import check_resume
 from stl_lfd.optim.runs.staging import StagedRun
-from stl_lfd.optim.summary import Summary
+from stl_lfd.optim.summary import ASK_TELL, Summary
 from stl_lfd.optim.task import Overrides, Task
 from stl_lfd.optim.trials import Outcome, Trial
 from stl_lfd.signals import read_signal_csv, write_signal_csv
@@ -170,7 +170,7 @@ def _tell_initial(run: RunDirectory, task: Task, space: Any, outcome: Outcome, p
     if not np.isfinite(outcome.robustness):
         raise SignalError(f"{outcome.payload.source}: the robustness of the unoptimised skill is {outcome.robustness}; the run needs a finite one to start")
     write_signal_csv(outcome.payload, run.path / SIGNALS_DIR / "initial.csv")
-    summary = Summary.of(task, space, float(outcome.robustness), [], max(time.time() - pending.asked, 0.0), outcome.components)
+    summary = Summary.of(task, space, float(outcome.robustness), [], max(time.time() - pending.asked, 0.0), outcome.components, ASK_TELL)
     run.write_summary(summary)
     run.clear_pending()
     return Told(None, float(outcome.robustness), summary)

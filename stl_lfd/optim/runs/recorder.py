@@ -42,7 +42,9 @@ class Recorder:
     def summary(self) -> Summary:
         prepared = self.prepared
         initial = prepared.summary
-        return Summary.of(prepared.task, prepared.space, initial.initial_robustness, self.history, self.wall_seconds, initial.initial_components)
+        return Summary.of(
+            prepared.task, prepared.space, initial.initial_robustness, self.history, self.wall_seconds, initial.initial_components, initial.executed_by or None
+        )
 
 
 def finish_run(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None) -> Summary:
