@@ -14,7 +14,9 @@ Placeholders in the command's arguments: `{reference}`, `{signals}` (the two pat
 
 The command runs without a shell (an argument list; a string is split as a shell would) unless
 `shell` is set, in its own process group, so that a timeout or Ctrl-C stops it with everything
-it started; what it leaves running when it exits is stopped too, after every execution.
+it started; what it leaves running when it exits is stopped too, after every execution. It never
+outlives the process that started it: a watchdog stops it when that process dies, even by
+kill -9 (`watchdog.py`).
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ from stl_lfd.sim.plausibility import check_recorded
 from stl_lfd.sim.reference import Reference, Rollout, write_reference_csv
 from stl_lfd.sim.safety import check_reference
 from stl_lfd.sim.scene import Scene
+from stl_lfd.sim.watchdog import Watchdog, forget_group, record_group, stop_leftover
 
 DEFAULT_TIMEOUT = 600.0  # seconds: a real trial takes about a minute
 STOP_GRACE = 3.0  # seconds between SIGTERM and SIGKILL when a command is stopped
@@ -203,6 +206,7 @@ def run_command(command: Command, values: dict[str, str], folder: Path) -> None:
         ExecutionError: the command cannot start, fails, is killed or times out.
     """
     environment = dict(os.environ, **{f"STLOPT_{name.upper()}": value for name, value in values.items()})
+    stop_leftover(folder, STOP_GRACE)  # a killed run's executor of this very trial: never two at once
     with open(folder / "stdout.txt", "wb") as stdout, open(folder / "stderr.txt", "wb") as stderr:
         try:
             process = subprocess.Popen(
@@ -213,6 +217,8 @@ def run_command(command: Command, values: dict[str, str], folder: Path) -> None:
             raise ExecutionError(
                 f"cannot start the command {command.run[0].split()[0] if command.shell else command.run[0]!r} ({error.strerror or error})"
             ) from None
+        record_group(folder, process.pid)
+        watchdog = Watchdog(process.pid, STOP_GRACE)  # stops the command if this process dies
         try:
             status = process.wait(timeout=command.timeout)
         except subprocess.TimeoutExpired:
@@ -221,7 +227,11 @@ def run_command(command: Command, values: dict[str, str], folder: Path) -> None:
         except BaseException:  # Ctrl-C: nothing the command started may outlive us
             stop_process_group(process)
             raise
-        stop_process_group(process)  # what it started and left behind ends with the execution
+        else:
+            stop_process_group(process)  # what it started and left behind ends with the execution
+        finally:
+            watchdog.release()
+            forget_group(folder)
     if status < 0:
         raise ExecutionError(f"the command was killed by {signal.Signals(-status).name}{_last_words(folder)}")
     if status != 0:

@@ -259,3 +259,84 @@ def test_a_misspelt_placeholder_is_named_and_other_braces_are_the_commands():
     with pytest.raises(ConfigError, match=r"the command has \{signal\}: did you mean \{signals\}\?"):
         Command.parse("executor {reference} {signal}")
     assert Command.parse("awk '{print}' {reference}").run == ("awk", "{print}", "{reference}")
+
+
+def _hanging_run(tmp_path, learned_model_file, workers=1):
+    """`stlopt optimize` in a child process whose executor hangs on trial 3 (with a child of its
+    own); the process, and the executor's and its child's PIDs once it hangs."""
+    import subprocess
+
+    from tests.processes import wait_for
+
+    task = executor_task(tmp_path, learned_model_file, trials=4)
+    environment = dict(os.environ, EXECUTOR_MODE="hang", EXECUTOR_BAD_TRIAL="3", EXECUTOR_CHILD_PID=str(tmp_path / "child.pid"))
+    stlopt = str(Path(sys.executable).parent / "stlopt")
+    process = subprocess.Popen(
+        [stlopt, "optimize", str(task.source), "--out", str(tmp_path / "run"), "--workers", str(workers)],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=environment,
+    )  # fmt: skip
+    wait_for(lambda: (tmp_path / "child.pid").exists())
+    recorded = json.loads((tmp_path / "run" / "executions" / "trial-0003" / "executor.json").read_text())
+    return process, task, recorded["group"], int((tmp_path / "child.pid").read_text())
+
+
+def test_kill_9_of_the_supervisor_stops_its_executor_and_a_resume_runs_the_trial_once(tmp_path, learned_model_file):
+    from tests.processes import alive, wait_for
+
+    process, task, executor, child = _hanging_run(tmp_path, learned_model_file)
+    process.kill()  # SIGKILL: no handler runs
+    process.wait()
+    wait_for(lambda: not alive(executor) and not alive(child), timeout=3.0 + 3.0)  # the watchdog's grace, and a margin
+    import subprocess
+
+    stlopt = str(Path(sys.executable).parent / "stlopt")
+    resumed = subprocess.run(
+        [stlopt, "optimize", str(task.source), "--out", str(tmp_path / "run"), "--resume", "--quiet"],
+        capture_output=True, text=True, env=dict(os.environ, EXECUTOR_MARKER=str(tmp_path / "marker")),
+    )  # fmt: skip
+    assert resumed.returncode == 0, resumed.stderr
+    assert (tmp_path / "marker").read_text().split() == ["3", "4"]  # trial 3 executed once more, then trial 4
+    uninterrupted = subprocess.run([stlopt, "optimize", str(task.source), "--out", str(tmp_path / "whole"), "--quiet"], capture_output=True, text=True)
+    assert uninterrupted.returncode == 0, uninterrupted.stderr
+    assert [(trial["x"], trial["robustness"]) for trial in trials_of(tmp_path / "run")] == [
+        (trial["x"], trial["robustness"]) for trial in trials_of(tmp_path / "whole")
+    ]
+
+
+def test_kill_9_of_a_worker_stops_its_executor(tmp_path, learned_model_file):
+    import signal
+
+    from tests.processes import alive, wait_for, worker_processes
+
+    process, _, executor, child = _hanging_run(tmp_path, learned_model_file, workers=2)
+    supervisor = next(pid for pid in worker_processes(process.pid) if executor in _children(pid))
+    os.kill(supervisor, signal.SIGKILL)
+    wait_for(lambda: not alive(executor) and not alive(child), timeout=6.0)
+    process.kill()
+    process.wait()
+
+
+def _children(pid: int) -> list[int]:
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1]) == pid:
+                    found.append(int(entry.name))
+            except (OSError, IndexError, ValueError):
+                continue
+    return found
+
+
+def test_a_leftover_executor_of_the_same_trial_is_stopped_before_another_starts(tmp_path):
+    import subprocess
+
+    from stl_lfd.sim.watchdog import record_group, stop_leftover
+    from tests.processes import alive
+
+    leftover = subprocess.Popen(["sleep", "300"], start_new_session=True)
+    record_group(tmp_path, leftover.pid)  # as a killed supervisor left it
+    assert stop_leftover(tmp_path, grace=3.0)
+    leftover.wait(timeout=5)
+    assert not alive(leftover.pid) and not (tmp_path / "executor.json").exists()
+    assert not stop_leftover(tmp_path, grace=3.0)  # nothing left to stop
