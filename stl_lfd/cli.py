@@ -585,7 +585,10 @@ def optimize(
     again = f"stlopt optimize {task_file or f'--spec {spec}{skill}'} --out {run_dir} --resume"
     with prepared, user_errors(on_interrupt=f"interrupted; the finished trials are kept. Continue with: {again}"):
         printer = TrialPrinter(prepared, quiet=quiet)
-        summary = finish_run(prepared, printer.trial)
+        try:
+            summary = finish_run(prepared, printer.trial)
+        finally:
+            printer.stop()
         printer.done(summary)
     print(json.dumps(summary.to_json(), indent=2))
 

@@ -1,9 +1,13 @@
 """What `stlopt optimize` shows on stderr while it runs: a header, one line per trial, a verdict.
 
-With `quiet`, only one line on what runs and the verdict (what `make run` shows).
+With `quiet`, only one line on what runs and the verdict (what `make run` shows), and on a
+terminal one self-overwriting line of progress in between (trial k of N, the best so far, the
+time spent and the time to go), which leaves nothing behind in pipes or logs.
 """
 
 from __future__ import annotations
+
+import time
 
 from rich.console import Console
 
@@ -30,6 +34,10 @@ class TrialPrinter:
                 doing = f"trials {done + 1} to {optimizer.trials}" if done else f"{optimizer.trials} trials"
                 doing += f" of method {optimizer.method}"
             self.console.print(f"{task.name}: {task.spec.name}, {doing} on the {task.backend} backend -> {prepared.run.path}")
+            self.done_before, self.started, self.best = done, time.monotonic(), summary.best_robustness
+            if self.console.is_terminal and done < optimizer.trials:
+                self.status = self.console.status(self._progress(done), spinner="dots")
+                self.status.start()
             return
         self.console.print(
             f"[bold]{task.name}[/]: {task.spec.name}, {task.semantics} robustness, {prepared.space.dimension} parameters, "
@@ -43,8 +51,25 @@ class TrialPrinter:
         self.console.print(plan + (f"; resuming after trial {done}" if done else ""))
         self.console.print(f"[dim]{'trial':>7} {'phase':>7} {'robustness':>11} {'best':>11} {'satisfied':>9} {'time':>7}[/]")
 
+    status = None  # the self-overwriting progress line (quiet, on a terminal)
+
+    def _progress(self, done: int) -> str:
+        """`trial k of N, best ..., elapsed, about ... to go` while trial k runs."""
+        elapsed = time.monotonic() - self.started
+        text = f"trial {done + 1} of {self.budget}"
+        if self.best is not None:
+            text += f", best {self.best:+.5f} ({'satisfied' if self.best > 0 else 'violated'})"
+        text += f", {_duration(elapsed)} spent"
+        finished = done - self.done_before
+        if finished:
+            text += f", about {_duration(elapsed / finished * (self.budget - done))} to go"
+        return text
+
     def trial(self, trial: Trial, best: Trial | None) -> None:
         if self.quiet:
+            if self.status is not None:
+                self.best = best.robustness if best is not None else None
+                self.status.update(self._progress(trial.trial))
             return
         value = f"{trial.robustness:+.5f}" if trial.robustness is not None else "failed"
         best_value = f"{best.robustness:+.5f}" if best is not None else "-"
@@ -54,7 +79,14 @@ class TrialPrinter:
             line += f"  [red]{trial.error}[/]"
         self.console.print(line)
 
+    def stop(self) -> None:
+        """Remove the progress line (before the verdict, or when the run stops early)."""
+        if self.status is not None:
+            self.status.stop()
+            self.status = None
+
     def done(self, summary: Summary) -> None:
+        self.stop()
         best = summary.best_robustness
         if best is None:
             self.console.print("[red]every trial failed[/]")
@@ -67,3 +99,13 @@ class TrialPrinter:
 
 def _verdict(satisfied: bool) -> str:
     return "[green]satisfied[/]" if satisfied else "[yellow]violated[/]"
+
+
+def _duration(seconds: float) -> str:
+    """`42 s`, `3 min 05 s`, `1 h 02 min`."""
+    seconds = int(round(seconds))
+    if seconds < 60:
+        return f"{seconds} s"
+    if seconds < 3600:
+        return f"{seconds // 60} min {seconds % 60:02d} s"
+    return f"{seconds // 3600} h {seconds % 3600 // 60:02d} min"
