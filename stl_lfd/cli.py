@@ -233,6 +233,10 @@ def learn(
     with user_errors():
         sets = demonstration_sets(demos_dir)
         if sets:
+            if output is not None and output.suffix.lower() == ".npz":
+                raise ConfigError(
+                    f"-o {output}: {demos_dir} holds one folder per skill ({', '.join(path.name for path in sets)}); -o names the folder their models go into"
+                )
             folder = check_output_folder(output if output is not None else Path("models"), "models folder")
             targets = {path: folder / f"{path.name}.npz" for path in sets}
         else:

@@ -671,6 +671,62 @@ CASES = [
         "the demonstrations have frame sidecars; a skill that follows objects needs a task file",
         {"s.stl": "phi := F x > 0\n"},
     ),
+    Case(
+        "rollout-command-fails-names-no-deleted-file",
+        ["rollout", "{model}", "--backend", "command", "--command", "sh -c 'echo motor fault >&2; exit 3'"],
+        7,
+        "the command exited with status 3: motor fault",
+    ),
+    Case(
+        "optimize-placements-on-command-backend",
+        ["optimize", "{case}/t.yaml", "--backend", "command", "--command", "true"],
+        5,
+        "several placements need a simulated backend (the command backend executes one reference per trial)",
+        {
+            "t.yaml": f"spec: {ROOT / 'specs' / 'phi3_strict_objects.stl'}\nbehaviour: {ROOT / 'configs' / 'behaviours' / 'pick_insert.yaml'}\nduration: 48\n"
+            "placements:\n  - {holder: {position: [0.6, 0.2, 0.04]}}\n  - {holder: {position: [0.5, 0.2, 0.04]}}\n"
+            "parameters:\n  pick: {durations: {components: all}}\n"
+        },
+    ),
+    Case("learn-sets-output-is-a-model-file", ["learn", str(ROOT / "demos"), "-o", "{case}/m.npz"], 5, "holds one folder per skill (insert, pick"),
+    Case("learn-sets-output-is-a-file", ["learn", str(ROOT / "demos"), "-o", "{case}/f"], 8, "is a file; the models folder must be a folder", {"f": "x"}),
+    Case("optimize-spec-missing", ["optimize", "--spec", "{case}/nope.stl"], 5, "no such spec file"),
+    Case(
+        "optimize-default-task-demos-missing",
+        ["optimize", "--spec", "{case}/s.stl", "--demos", "{case}/nope"],
+        4,
+        "no such folder of demonstrations",
+        {"s.stl": "phi := F x > 0\n"},
+    ),
+    Case(
+        "optimize-default-task-model-missing",
+        ["optimize", "--spec", "{case}/s.stl", "--model", "{case}/nope.npz"],
+        6,
+        "nope.npz",
+        {"s.stl": "phi := F x > 0\n"},
+    ),
+    Case(
+        "scene-rim-not-a-number",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml", "--backend", "kinematic"],
+        5,
+        "'frames.cup.rim' must be a number",
+        {
+            "s.yaml": "description: d\nobjects:\n  - {name: a, shape: box, size: [0.01, 0.01, 0.01], position: [0.5, 0, 0.02]}\n"
+            "frames:\n  cup: {position: [0.5, 0, 0.02], objects: [a], rim: high}\n"
+        },
+    ),
+    Case(
+        "scene-into-a-fixed-object",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml", "--backend", "kinematic"],
+        5,
+        "'frames.peg.into': the frame's first object, a, must be movable",
+        {
+            "s.yaml": "description: d\nobjects:\n  - {name: a, shape: box, size: [0.01, 0.01, 0.01], position: [0.5, 0, 0.02]}\n"
+            "  - {name: b, shape: box, size: [0.02, 0.02, 0.02], position: [0.6, 0, 0.02]}\n"
+            "frames:\n  peg: {position: [0.5, 0, 0.02], objects: [a], into: cup}\n  cup: {position: [0.6, 0, 0.02], objects: [b], rim: 0.02}\n"
+        },
+    ),
+    tell_case("tell-tilt-in-degrees", recording(tilt=lambda i, t: 90.0), "tilt = 90, but the hand's tilt (rad) lies in [0, 3.14159]"),
     tell_case("tell-tilt-huge", recording(tilt=lambda i, t: 1e9), "tilt = 1e+09, but the hand's tilt (rad) lies in [0, 3.14159]"),
     tell_case("tell-tilt-negative", recording(tilt=lambda i, t: -3), "tilt = -3, but the hand's tilt"),
     tell_case("tell-force-negative", recording(force=lambda i, t: -50), "a force of -50 N; `force` is the norm of the contact force, never negative"),

@@ -21,7 +21,6 @@ from stl_lfd.optim.trials import Outcome
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim import Backend, BackendOptions, CommandBackend, Reference, Scene, load_scene, new_backend
-from stl_lfd.sim.registry import backend_class
 from stl_lfd.sim.tracking import TrackingModel
 from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour
 from stl_lfd.skill.placed import PlacedSkill, placed_scene
@@ -205,8 +204,6 @@ def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = N
     `task.spec` when given; with a backend of its own unless not `execute`); spec problems are
     found here, before any trial: unknown signals, and windows that reach past the rollout
     duration."""
-    if len(task.placements) > 1 and backend_class(task.backend).capabilities.needs_command:
-        raise ConfigError(f"{task.source}: several placements need a simulated backend (the command backend executes one reference per trial)")
     space = build_search_space(models, task.parameters, task.source)
     spec = load_spec(task.spec) if spec is None else spec
     parts = split_spec(spec, task.semantics, task.nu, source=str(task.spec))

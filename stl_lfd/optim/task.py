@@ -52,8 +52,11 @@ class Task:
     placements: tuple[dict[str, Pose], ...] = ()
 
     def __post_init__(self) -> None:
-        if backend_class(self.backend).capabilities.needs_command and self.command is None:
+        needs_command = backend_class(self.backend).capabilities.needs_command
+        if needs_command and self.command is None:
             raise ConfigError(f"{self.source}: the {self.backend} backend needs the command that executes a trial ('command' in the task file, or --command)")
+        if needs_command and len(self.placements) > 1:
+            raise ConfigError(f"{self.source}: several placements need a simulated backend (the {self.backend} backend executes one reference per trial)")
 
     def with_overrides(self, **changes: Any) -> "Task":
         """A copy with the settings of an `Overrides` (`spec`, `backend`, `command`, `placements`,

@@ -163,11 +163,11 @@ class CommandBackend(BackendBase):
                 "run_dir": str(Path(self.folder).resolve()) if self.folder is not None else str(folder.resolve()),
                 "scene": scene.source or scene.name, "rate": f"{rate:g}",
             }  # fmt: skip
-            run_command(self.command, values, folder)
+            run_command(self.command, values, folder, kept=self.folder is not None)
             if not reference_path.is_file() or _digest(reference_path) != written:
                 raise ExecutionError(f"{reference_path}: the command removed or changed the reference it was given")
             if not signals_path.is_file():
-                raise ExecutionError(f"the command exited without writing {signals_path}{_last_words(folder)}")
+                raise ExecutionError(f"the command exited without writing {signals_path}{_last_words(folder, self.folder is not None)}")
             signals = read_signal_csv(signals_path, required=("x", "y", "z"))
             check_recorded(signals, reference, scene, rate)
         return Rollout(signals, tracking_error(signals, reference))
@@ -198,9 +198,10 @@ def gate(reference: Reference, scene: Scene) -> None:
     check_reference(reference, scene.safety)
 
 
-def run_command(command: Command, values: dict[str, str], folder: Path) -> None:
+def run_command(command: Command, values: dict[str, str], folder: Path, kept: bool = True) -> None:
     """Run `command` with `values` for its placeholders (and in its environment), its output in
     `folder/stdout.txt` and `folder/stderr.txt`; stop its process group on timeout or Ctrl-C.
+    Errors name `folder/stderr.txt` only when the folder is `kept` (not a temporary one).
 
     Raises:
         ExecutionError: the command cannot start, fails, is killed or times out.
@@ -223,7 +224,7 @@ def run_command(command: Command, values: dict[str, str], folder: Path) -> None:
             status = process.wait(timeout=command.timeout)
         except subprocess.TimeoutExpired:
             stop_process_group(process)
-            raise ExecutionError(f"the command did not finish within its timeout of {command.timeout:g} s and was stopped{_last_words(folder)}") from None
+            raise ExecutionError(f"the command did not finish within its timeout of {command.timeout:g} s and was stopped{_last_words(folder, kept)}") from None
         except BaseException:  # Ctrl-C: nothing the command started may outlive us
             stop_process_group(process)
             raise
@@ -233,9 +234,9 @@ def run_command(command: Command, values: dict[str, str], folder: Path) -> None:
             watchdog.release()
             forget_group(folder)
     if status < 0:
-        raise ExecutionError(f"the command was killed by {signal.Signals(-status).name}{_last_words(folder)}")
+        raise ExecutionError(f"the command was killed by {signal.Signals(-status).name}{_last_words(folder, kept)}")
     if status != 0:
-        raise ExecutionError(f"the command exited with status {status}{_last_words(folder)}")
+        raise ExecutionError(f"the command exited with status {status}{_last_words(folder, kept)}")
 
 
 def stop_process_group(process: subprocess.Popen) -> None:
@@ -289,11 +290,14 @@ def _digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def _last_words(folder: Path) -> str:
-    """`: <the last line of its stderr> (folder/stderr.txt)`, or '' when it wrote nothing."""
+def _last_words(folder: Path, kept: bool = True) -> str:
+    """`: <the last line of its stderr> (see folder/stderr.txt)`, or that it wrote nothing; the
+    file is named only when the folder is `kept`."""
     path = folder / "stderr.txt"
     try:
         lines = [line.strip() for line in path.read_text(errors="replace").splitlines() if line.strip()]
     except OSError:
         return ""
+    if not kept:
+        return f": {lines[-1][:300]}" if lines else " (nothing on stderr)"
     return f": {lines[-1][:300]} (see {path})" if lines else f" (nothing on stderr: {path})"

@@ -139,7 +139,6 @@ def test_optimize_from_python_takes_placements():
 
 
 def test_executions_outside_stlopt_take_one_placement(tmp_path):
-    from stl_lfd.optim.objective import objective_for
     from stl_lfd.optim.runs.asktell import ask_new
     from stl_lfd.optim.runs.resume import inputs_record
     from stl_lfd.optim.task import Overrides
@@ -147,9 +146,8 @@ def test_executions_outside_stlopt_take_one_placement(tmp_path):
     task = load_task(placed_task(tmp_path))
     with pytest.raises(ConfigError, match="takes one placement"):
         ask_new(task, tmp_path / "run", inputs_record(task, Overrides(), task))
-    command = task.with_overrides(backend="command", command=__import__("stl_lfd").Command.parse("true"))
-    with pytest.raises(ConfigError, match="several placements need a simulated backend"):
-        objective_for(command, {}, execute=False)
+    with pytest.raises(ConfigError, match="several placements need a simulated backend"):  # refused with the task, before any learning
+        task.with_overrides(backend="command", command=__import__("stl_lfd").Command.parse("true"))
     assert not (tmp_path / "run").exists()
 
 
