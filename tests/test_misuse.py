@@ -726,6 +726,32 @@ CASES = [
             "frames:\n  peg: {position: [0.5, 0, 0.02], objects: [a], into: cup}\n  cup: {position: [0.6, 0, 0.02], objects: [b], rim: 0.02}\n"
         },
     ),
+    Case(
+        "learn-sets-one-bad-writes-nothing",
+        ["learn", "{case}/d", "-o", "{case}/models", "-K", "2"],
+        4,
+        "b/demo_01.csv",
+        {
+            "d/a/demo_01.csv": "t,x,y,z\n" + "".join(f"{0.1 * i:.1f},{0.4 + 0.01 * i},0,0.3\n" for i in range(8)),
+            "d/b/demo_01.csv": "t,x,y,z\n0,0.4,0,0.3\n0.1,nan,0,0.3\n",
+        },
+    ),
+    Case(
+        "optimize-default-task-demos-and-model",
+        ["optimize", "--spec", "{case}/s.stl", "--demos", "{demos}", "--model", "{model}"],
+        5,
+        "give --demos DIR or --model FILE for the default task, not both",
+        {"s.stl": "phi := F x > 0\n"},
+    ),
+    Case(
+        "optimize-place-yaw-huge",
+        ["optimize", "{case}/t.yaml", "--place", "holder=0.6,0.2,0.04,1e308"],
+        5,
+        "the yaw must be in radians, within two turns either way (got 1e+308)",
+        {
+            "t.yaml": f"spec: {ROOT / 'specs' / 'phi3_strict_objects.stl'}\nbehaviour: {ROOT / 'configs' / 'behaviours' / 'pick_insert.yaml'}\nduration: 48\nparameters:\n  pick: {{durations: {{components: all}}}}\n"
+        },
+    ),
     tell_case("tell-tilt-in-degrees", recording(tilt=lambda i, t: 90.0), "tilt = 90, but the hand's tilt (rad) lies in [0, 3.14159]"),
     tell_case("tell-tilt-huge", recording(tilt=lambda i, t: 1e9), "tilt = 1e+09, but the hand's tilt (rad) lies in [0, 3.14159]"),
     tell_case("tell-tilt-negative", recording(tilt=lambda i, t: -3), "tilt = -3, but the hand's tilt"),
@@ -783,6 +809,7 @@ def test_bad_input(case: Case, workspace, tmp_path, monkeypatch):
     folder.mkdir()
     for name, content in case.files.items():
         path = folder / name
+        path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(content) if isinstance(content, bytes) else path.write_text(
             content.replace("@spec@", PHI1).replace("@model@", str(workspace["model"]))
         )

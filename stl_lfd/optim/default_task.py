@@ -56,7 +56,9 @@ def _names_spec(path: Path, spec: Path) -> bool:
 def default_task(spec: Path, demos: Path | None = None, model: Path | None = None) -> Task:
     """The default task (see the module's docstring) for `spec` and the skill in `demos` or
     `model` (exactly one)."""
-    if (demos is None) == (model is None):
+    if demos is not None and model is not None:
+        raise ConfigError(f"{spec}: give --demos DIR or --model FILE for the default task, not both")
+    if demos is None and model is None:
         raise ConfigError(f"{spec}: no task file in configs/ names this spec; give a task file, or --demos DIR or --model FILE to build a default task")
     states, seconds = _skill_size(demos, model)
     spec = Path(spec).resolve()
