@@ -286,7 +286,7 @@ def test_kill_9_of_the_supervisor_stops_its_executor_and_a_resume_runs_the_trial
     process, task, executor, child = _hanging_run(tmp_path, learned_model_file)
     process.kill()  # SIGKILL: no handler runs
     process.wait()
-    wait_for(lambda: not alive(executor) and not alive(child), timeout=3.0 + 3.0)  # the watchdog's grace, and a margin
+    wait_for(lambda: not alive(executor) and not alive(child), timeout=3.0)
     import subprocess
 
     stlopt = str(Path(sys.executable).parent / "stlopt")
@@ -311,7 +311,7 @@ def test_kill_9_of_a_worker_stops_its_executor(tmp_path, learned_model_file):
     process, _, executor, child = _hanging_run(tmp_path, learned_model_file, workers=2)
     supervisor = next(pid for pid in worker_processes(process.pid) if executor in _children(pid))
     os.kill(supervisor, signal.SIGKILL)
-    wait_for(lambda: not alive(executor) and not alive(child), timeout=6.0)
+    wait_for(lambda: not alive(executor) and not alive(child), timeout=3.0)
     process.kill()
     process.wait()
 
