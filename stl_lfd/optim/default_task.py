@@ -18,11 +18,12 @@ from typing import Any
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.optim.task import Task, parse_task
+from stl_lfd.sim.registry import DEFAULT_BACKEND
 from stl_lfd.yamlfile import read_yaml
 
 DEFAULTS: dict[str, Any] = {
     "scene": "free_space",
-    "backend": "pybullet",
+    "backend": DEFAULT_BACKEND,
     "semantics": "new",
     "rate": 100,
     "optimizer": {"method": "plan", "initial": 8, "trials": 32, "seed": 0},

@@ -123,8 +123,10 @@ def _executed_by(run: RunData) -> str:
 
 def _simulated(run: RunData) -> bool:
     """Whether the run's trials were simulated by stlopt (a replay shows what ran)."""
+    from stl_lfd.sim.registry import backend_class, backend_names
+
     executed_by = run.summary.executed_by or run.task.backend
-    return executed_by in ("pybullet", "mujoco", "kinematic")
+    return executed_by in backend_names() and not backend_class(executed_by).capabilities.needs_command
 
 
 def commands(run: RunData) -> list[tuple[str, str]]:

@@ -70,9 +70,15 @@ def fit_multi_output_gp(unit_X: np.ndarray, outputs: np.ndarray):
     from botorch.models import SingleTaskGP
     from botorch.models.transforms import Standardize
 
+    from botorch.exceptions.warnings import InputDataWarning
+
     train_X = torch.as_tensor(unit_X, dtype=torch.float64)
     train_Y = torch.as_tensor(outputs, dtype=torch.float64)
-    return fit_hyperparameters(SingleTaskGP(train_X, train_Y, outcome_transform=Standardize(train_Y.shape[-1])), unit_X)
+    with warnings.catch_warnings():
+        # a part of the spec whose value no trial has changed yet cannot be standardised (std 0); its GP is flat, as intended
+        warnings.simplefilter("ignore", InputDataWarning)
+        model = SingleTaskGP(train_X, train_Y, outcome_transform=Standardize(train_Y.shape[-1]))
+    return fit_hyperparameters(model, unit_X)
 
 
 def fit_hyperparameters(model, unit_inputs: np.ndarray, iterations: int = FIT_ITERATIONS):
