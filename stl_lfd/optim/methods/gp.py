@@ -67,10 +67,9 @@ def fit_multi_output_gp(unit_X: np.ndarray, outputs: np.ndarray):
     """A `SingleTaskGP` with one independent output per column of `n x m` `outputs` (each
     standardised) on `n x d` inputs in the unit cube, fitted by maximum marginal likelihood."""
     import torch
+    from botorch.exceptions.warnings import InputDataWarning
     from botorch.models import SingleTaskGP
     from botorch.models.transforms import Standardize
-
-    from botorch.exceptions.warnings import InputDataWarning
 
     train_X = torch.as_tensor(unit_X, dtype=torch.float64)
     train_Y = torch.as_tensor(outputs, dtype=torch.float64)
