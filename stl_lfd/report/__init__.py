@@ -39,6 +39,7 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
         ("transitions", figures.transition_graphs(run)),
         ("durations", figures.durations_per_trial(run)),
         ("forces", figures.contact_forces(run)),
+        ("wrench", figures.wrench(run)),
         ("objects", figures.object_signals(run)),
         ("tilt", figures.tilt(run)),
         ("tracking", figures.tracking(run)),

@@ -19,6 +19,7 @@ LEFT_OUT = {
     "gp_slices": "fewer than three trials finished",
     "forces": "no trial touched anything (the contact force was zero throughout)",
     "tilt": "no trial turned the hand by more than a degree",
+    "wrench": "the run recorded no wrist force-torque components, or nothing was touched",
     "objects": "the spec compares no signal of the scene's objects (shaft_tilt, shaft_depth, ...) with a number",
     "tracking": "the run learned no tracking model (its backend plays the plan back, it has several object placements, or its method is not plan)",
 }
@@ -211,6 +212,11 @@ def caption(name: str, run: RunData) -> str:
             + ("; the dashed line is where the rollout ends." if len(run.models) == 1 else ".")
         ),
         "forces": f"Contact force over time per trial: {numbered}." + (" Dashed green: the spec's thresholds on it." if run.thresholds.get("force") else ""),
+        "wrench": (
+            "The wrist force-torque sensor's components of the unoptimised skill (dashed) and the best trial (solid), in the robot's base "
+            "frame with the hand's and its load's weight removed, as a Franka's external-wrench estimate gives them: force (N) above, "
+            "torque about the grasp point (Nm) below."
+        ),
         "objects": (
             f"The signals of the scene's objects that the spec constrains, over time per trial: {numbered}; dashed green, the spec's "
             "thresholds (the shaft's depth below the hole's rim and its offset from the hole's axis in m, its tilt from upright in rad, "

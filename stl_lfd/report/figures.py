@@ -433,6 +433,30 @@ def contact_forces(run: RunData) -> Figure | None:
     return figure
 
 
+def wrench(run: RunData) -> Figure | None:
+    """The wrist sensor's force and torque components (`fx`..`tz`, base frame) of the
+    unoptimised and the best trial, when they were recorded and something was touched."""
+    from stl_lfd.choices import WRENCH_SIGNALS
+
+    shown = {number: run.signals[number] for number in (0, run.best.trial if run.best is not None else None) if number in run.signals}
+    shown = {number: table for number, table in shown.items() if set(WRENCH_SIGNALS) <= set(table.columns)}
+    if not shown or not any(np.any(table.columns["force"] > 0) for table in shown.values() if "force" in table.columns):
+        return None
+    figure = Figure(figsize=(9, 5.5), layout="constrained")
+    panels = figure.subplots(2, 1, sharex=True)
+    styles = {0: ("--", "unoptimised"), run.best.trial if run.best is not None else -1: ("-", "best")}
+    for axes, names, unit in ((panels[0], WRENCH_SIGNALS[:3], "N"), (panels[1], WRENCH_SIGNALS[3:], "Nm")):
+        for color, name in zip(("tab:red", "tab:green", "tab:blue"), names):
+            for number, table in shown.items():
+                style, label = styles[number]
+                axes.plot(table.times, table.columns[name], color=color, ls=style, lw=1.2, label=f"{name}, {label}")
+        axes.set_ylabel(f"{'force' if unit == 'N' else 'torque'} ({unit})")
+        axes.legend(loc="upper left", bbox_to_anchor=(1, 1), fontsize=8)
+    panels[-1].set_xlabel("t (s)")
+    figure.suptitle("the wrist's force and torque, base frame (the hand's and its load's weight removed)")
+    return figure
+
+
 def object_signals(run: RunData) -> Figure | None:
     """The scene objects' signals the spec constrains (shaft tilt, depth, offset...) per trial,
     with the spec's thresholds."""

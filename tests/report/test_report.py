@@ -81,10 +81,15 @@ def test_forces_and_comparison_when_the_data_is_there(run_dir, tmp_path):
     table = read_signal_csv(signals)
     table.columns["force"] = np.linspace(0.0, 3.0, table.samples)
     write_signal_csv(table, signals)
+    initial = read_signal_csv(touched / "signals" / "initial.csv")  # a wrist sensor's reading of the unoptimised skill
+    ramp = np.linspace(0.0, 3.0, initial.samples)
+    initial.columns |= {"force": ramp, "fx": 0 * ramp, "fy": 0 * ramp, "fz": ramp, "tx": 0.01 * ramp, "ty": 0 * ramp, "tz": 0 * ramp}
+    write_signal_csv(initial, touched / "signals" / "initial.csv")
     out = tmp_path / "report"
     result = runner.invoke(app, ["report", str(touched), "--out", str(out), "--compare", str(run_dir), "--gp-parameter", "duration[4]"])
     assert result.exit_code == 0, result.stderr
     assert_picture(out / "forces.png")
+    assert_picture(out / "wrench.png")
     assert_picture(out / "compare.png")
     assert 'src="forces.png"' in (out / "index.html").read_text()
 
