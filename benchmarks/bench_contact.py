@@ -1,5 +1,5 @@
-"""Where the shaft ends on the contact tasks (phi3, phi3_inserted, phi3_reorient,
-phi3_reorient_one): an independent physical check of every trial of short optimisation runs,
+"""Where the shaft ends on the contact tasks (phi3, phi3_reorient and phi3_reorient_one by
+default; phi3_inserted with --tasks): an independent physical check of every trial of short optimisation runs,
 the unoptimised trial included, read from the run directory's recorded shaft and holder poses
 (not from the outcome signals the specs use), against the spec's verdict.
 

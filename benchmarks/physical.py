@@ -31,16 +31,21 @@ SHAFT_HALF_LENGTH, HOLDER_TOP, CLEARANCE = 0.06, 0.06, 0.006
 
 
 def is_contact_task(task: Any) -> bool:
-    """Whether `task`'s scene has a shaft that goes into the holder's hole."""
+    """Whether `task`'s scene has a shaft that goes into the holder's hole, at one placement
+    (with several, the recorded signals are the worst placement's, whose holder's turn they do
+    not name, so the check cannot be made)."""
     from stl_lfd.sim import load_scene
 
-    return any(frame.name == "shaft" and frame.into == "holder" for frame in load_scene(task.scene).frames)
+    return len(task.placements) <= 1 and any(frame.name == "shaft" and frame.into == "holder" for frame in load_scene(task.scene).frames)
 
 
 def holder_pose(task: Any) -> Pose:
-    """The holder frame's pose in `task` (its first placement, else the scene's)."""
+    """The holder frame's pose in `task` (its placement, else the scene's); a task with several
+    placements has no one holder pose (ValueError)."""
     from stl_lfd.sim import load_scene
 
+    if len(task.placements) > 1:
+        raise ValueError(f"{task.name}: several placements; the recorded signals do not say which holder pose they are at")
     placed = task.placements[0] if task.placements else {}
     return placed.get("holder") or load_scene(task.scene).frame_poses["holder"]
 

@@ -66,7 +66,6 @@ def _print_warning(message, category, filename, lineno, file=None, line=None) ->
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 SIGNAL_SUFFIXES = (".csv",)
 INTERRUPTED = 130  # what a shell reports for a process that SIGINT ended
-EXIT_SIGPIPE = 141  # and for one that wrote to a closed pipe
 PLACE_HELP = "Place an object frame of the scene: NAME=x,y[,z[,yaw]] (metres, yaw in radians; z and yaw default to the scene's). Repeat for several frames."
 COMMAND_HELP = "With --backend command: the executor to run, with {reference} and {signals} for the two CSV paths (no shell)."
 COMMAND_TIMEOUT_HELP = "Seconds after which the executor is stopped and the trial fails (default: the task's, or 600)."
@@ -103,12 +102,9 @@ def main() -> None:
     keep_freed_memory()
     try:
         app()
-    except BrokenPipeError:  # the reader went away (`stlopt retrieve M | head`): stop quietly, as Unix tools do
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # nothing more to flush at exit
-        sys.exit(EXIT_SIGPIPE)
-    except OSError as error:  # the output cannot be written (a full disk, /dev/full)
-        where = f" ({error.filename})" if error.filename else " (standard output)"
-        print(f"error: cannot write{where}: {error.strerror or error}", file=sys.stderr)
+    except OSError as error:  # what no command turned into an error of its own: stdout on a full disk (/dev/full)
+        where = error.filename or "cannot write the output"  # without a file name: stdout
+        print(f"error: {where}: {error.strerror or error}", file=sys.stderr)
         sys.exit(OutputError.exit_code)
     except SystemExit as stop:
         if stop.code == INTERRUPTED:

@@ -34,7 +34,7 @@ class TrialPrinter:
                 doing = f"trials {done + 1} to {optimizer.trials}" if done else f"{optimizer.trials} trials"
                 doing += f" of method {optimizer.method}"
             self.console.print(f"{task.name}: {task.spec.name}, {doing} on the {task.backend} backend -> {prepared.run.path}")
-            self.done_before, self.started, self.best = done, time.monotonic(), summary.best_robustness
+            self.done_before, self.finished, self.started, self.best = done, done, time.monotonic(), summary.best_robustness
             if self.console.is_terminal and done < optimizer.trials:
                 self.status = self.console.status(self._progress(done), spinner="dots")
                 self.status.start()
@@ -54,14 +54,14 @@ class TrialPrinter:
     status = None  # the self-overwriting progress line (quiet, on a terminal)
 
     def _progress(self, done: int) -> str:
-        """`trial k of N, best ..., elapsed, about ... to go` while trial k runs."""
+        """`trial k of N, best ..., elapsed, about ... to go` while trial k = `done` + 1 runs."""
         elapsed = time.monotonic() - self.started
-        text = f"trial {done + 1} of {self.budget}"
+        text = f"trial {done + 1} of {self.budget}" if done < self.budget else f"{self.budget} trials done"
         if self.best is not None:
             text += f", best {self.best:+.5f} ({'satisfied' if self.best > 0 else 'violated'})"
         text += f", {_duration(elapsed)} spent"
         finished = done - self.done_before
-        if finished:
+        if finished and done < self.budget:
             text += f", about {_duration(elapsed / finished * (self.budget - done))} to go"
         return text
 
@@ -69,7 +69,8 @@ class TrialPrinter:
         if self.quiet:
             if self.status is not None:
                 self.best = best.robustness if best is not None else None
-                self.status.update(self._progress(trial.trial))
+                self.finished += 1  # counted, not the trial's number: with workers, trials finish out of order
+                self.status.update(self._progress(self.finished))
             return
         value = f"{trial.robustness:+.5f}" if trial.robustness is not None else "failed"
         best_value = f"{best.robustness:+.5f}" if best is not None else "-"

@@ -34,7 +34,7 @@ def test_learn_demos_learns_every_skill_into_models(checkout):
 
 
 def test_learning_several_skills_writes_nothing_when_one_fails(checkout):
-    (checkout / "demos" / "turn" / "demo_02.csv").write_text("t,x,y,z\n0,0.4,0,0.3\n0.02,nan,0,0.3\n")
+    (checkout / "demos" / "insert" / "demo_02.csv").write_text("t,x,y,z\n0,0.4,0,0.3\n0.02,nan,0,0.3\n")  # the first skill
     result = runner.invoke(app, ["learn", "demos/"])
     assert result.exit_code != 0 and "demo_02.csv" in result.stderr and "Traceback" not in result.stderr
     assert not (checkout / "models").exists() or not list((checkout / "models").iterdir())

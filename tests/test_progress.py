@@ -40,5 +40,5 @@ def test_on_a_terminal_quiet_shows_live_progress(tmp_path):
     _, status = os.waitpid(pid, 0)
     assert os.waitstatus_to_exitcode(status) == 0, shown.decode(errors="replace")
     text = shown.decode(errors="replace")
-    assert "trial 1 of 4" in text and "trial 4 of 4" in text and "to go" in text and "spent" in text
+    assert "trial 1 of 4" in text and "trial 4 of 4" in text and "to go" in text and "spent" in text and "trial 5 of 4" not in text
     assert text.rfind("best: trial") > text.rfind("trial 4 of 4")  # the verdict after the progress, which is gone

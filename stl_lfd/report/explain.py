@@ -20,7 +20,7 @@ LEFT_OUT = {
     "forces": "no trial touched anything (the contact force was zero throughout)",
     "tilt": "no trial turned the hand by more than a degree",
     "wrench": "the run recorded no wrist force-torque components, or nothing was touched",
-    "objects": "the spec compares no signal of the scene's objects (shaft_tilt, shaft_depth, ...) with a number",
+    "objects": "the spec compares no recorded signal of the scene's objects (shaft_tilt, shaft_depth, ...) with a number",
     "tracking": "the run learned no tracking model (its backend plays the plan back, it has several object placements, or its method is not plan)",
 }
 
@@ -115,6 +115,8 @@ def _executed_by(run: RunData) -> str:
     from stl_lfd.optim.summary import ASK_TELL
 
     executed_by = run.summary.executed_by or run.task.backend
+    if ", then " in executed_by:
+        return f"trials executed by {executed_by}"
     if executed_by == ASK_TELL:
         return "executed elsewhere and told (stlopt ask/tell)"
     if executed_by.startswith("command: "):

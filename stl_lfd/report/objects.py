@@ -57,9 +57,10 @@ def _turn(origin, first, second) -> float:
 
 def fixed_frame_objects(run: RunData) -> list[SceneObject]:
     """The fixed objects of the scene's frames (what a movable object is put into or taken
-    from), at the run's placement; none when the run has several placements."""
+    from), at the run's placement; none when the run has several placements (the recorded
+    signals are the worst placement's, which they do not name)."""
     scene = run.scene
-    if scene is None:
+    if scene is None or len(run.task.placements) > 1:
         return []
     names = {name for frame in scene.frames for name in frame.objects}
     return [item for item in scene.objects if item.name in names and item.mass == 0]

@@ -43,7 +43,7 @@ class RunData:
         trials: finished trials in order; signals: trial number -> recorded signals (0 is the
         unoptimised skill); regions: name -> {signal: (lo, hi)}; constraints: the temporal
         use of each region by the spec; thresholds: signal -> the numbers the spec compares it
-        with; scene: the scene at the run's placement (None with several placements);
+        with; scene: the scene at the run's one placement (as the scene file has it with several);
         missing_signals: the run's signal files that should be there and are not (a damaged
         run: their trials are left out of the figures).
     """
@@ -111,15 +111,14 @@ def load_run(path: Path) -> RunData:
 
 
 def _placed_scene(task: Task) -> Scene | None:
-    """The task's scene at its one placement (or as the scene file has it); None with several
-    placements, whose recorded signals are the worst placement's."""
-    if len(task.placements) > 1:
-        return None
+    """The task's scene at its one placement, or as the scene file has it (with several
+    placements, whose recorded signals are the worst placement's, or none); None when the scene
+    cannot be loaded any more."""
     try:
         scene = load_scene(task.scene)
     except ConfigError:  # a scene file moved or changed since the run: the figures go without objects
         return None
-    return scene.place(task.placements[0]) if task.placements else scene
+    return scene.place(task.placements[0]) if len(task.placements) == 1 else scene
 
 
 def used_regions(spec: ast.Spec) -> dict[str, dict[str, tuple[float, float]]]:

@@ -218,9 +218,10 @@ def run_command(command: Command, values: dict[str, str], folder: Path, kept: bo
             raise ExecutionError(
                 f"cannot start the command {command.run[0].split()[0] if command.shell else command.run[0]!r} ({error.strerror or error})"
             ) from None
-        record_group(folder, process.pid)
-        watchdog = Watchdog(process.pid, STOP_GRACE)  # stops the command if this process dies
+        watchdog = None
         try:
+            record_group(folder, process.pid)
+            watchdog = Watchdog(process.pid, STOP_GRACE)  # stops the command if this process dies
             status = process.wait(timeout=command.timeout)
         except subprocess.TimeoutExpired:
             stop_process_group(process)
@@ -231,7 +232,8 @@ def run_command(command: Command, values: dict[str, str], folder: Path, kept: bo
         else:
             stop_process_group(process)  # what it started and left behind ends with the execution
         finally:
-            watchdog.release()
+            if watchdog is not None:
+                watchdog.release()
             forget_group(folder)
     if status < 0:
         raise ExecutionError(f"the command was killed by {signal.Signals(-status).name}{_last_words(folder, kept)}")

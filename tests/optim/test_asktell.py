@@ -283,3 +283,12 @@ def test_ask_with_more_iterations_extends_the_budget_that_tell_counts(tmp_path, 
     assert told.exit_code == 0, told.stderr
     assert f"1 trial left: stlopt ask {run}" in told.stderr
     assert json.loads((run / "summary.json").read_text())["budget"] == 5
+
+
+def test_a_run_executed_in_two_ways_says_so():
+    from stl_lfd.optim.runs.recorder import combined_execution
+
+    assert combined_execution("pybullet", "pybullet") == "pybullet"
+    assert combined_execution("", "kinematic") == "kinematic"  # a run recorded before executed_by
+    assert combined_execution("pybullet", "stlopt ask/tell") == "pybullet, then stlopt ask/tell"
+    assert combined_execution("pybullet, then stlopt ask/tell", "stlopt ask/tell") == "pybullet, then stlopt ask/tell"

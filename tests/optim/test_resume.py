@@ -138,13 +138,14 @@ def test_staging_folders_of_killed_runs_are_removed_by_the_next_run(tmp_path):
     from stl_lfd.optim.runs.staging import ABANDONED_AFTER, remove_abandoned
 
     long_ago = time.time() - 2 * ABANDONED_AFTER
-    abandoned, building, fresh = (tmp_path / f".run.{name}" for name in ("k1ll3d", "bu1ld", "n3w"))
-    for folder in (abandoned, building, fresh):
+    abandoned, building, fresh = (tmp_path / f".run.{name}" for name in ("k1ll3d_a", "bu1ld_ab", "n3w_abcd"))
+    users = tmp_path / ".run.backup"  # a hidden folder of the user's, with a lock file even
+    for folder in (abandoned, building, fresh, users):
         folder.mkdir()
-        (folder / "task.yaml").write_text("name: x\n")
+        (folder / ".lock").write_text("123\n")
     held = RunLock.acquire(building, building)  # another process building its run
-    for folder in (abandoned, building):
+    for folder in (abandoned, building, users):
         os.utime(folder, (long_ago, long_ago))
     remove_abandoned(tmp_path / "run")
     held.release()
-    assert not abandoned.exists() and building.exists() and fresh.exists()
+    assert not abandoned.exists() and building.exists() and fresh.exists() and users.exists()

@@ -108,7 +108,7 @@ def ask(
         if pending is not None:
             return Asked(pending.trial, _reference_path(run.path, pending.trial), pending.phase, again=True)
         prepared = prepared_from(run, task, execute=False)
-        recorder, objective = Recorder(prepared), prepared.objective
+        recorder, objective = Recorder(prepared, ASK_TELL), prepared.objective
         design = run.initial_design()
         if design is not None and design.shape != (task.optimizer.initial, len(prepared.space.bounds[0])):
             design = None
@@ -158,7 +158,7 @@ def tell(out: Path, signals_path: Path | None, failure: str | None = None) -> To
         outcome = f"execution failed: {failure}" if failure is not None else _scored(prepared.objective, reference, Path(signals_path), run, pending.trial)
         seconds = max(time.time() - pending.asked, 0.0)
         trial = Trial.of_outcome(pending.trial, pending.phase, pending.x, outcome, pending.optimizer_seconds, seconds)
-        recorder = Recorder(prepared)
+        recorder = Recorder(prepared, ASK_TELL)
         recorder.record(trial, None if isinstance(outcome, str) else outcome.payload, trial.wall_seconds)
         run.clear_pending()
         return Told(trial, trial.robustness, recorder.summary())

@@ -11,7 +11,7 @@ import numpy as np
 from stl_lfd.optim.loop import run_remaining_trials
 from stl_lfd.optim.objective import ObjectiveFactory
 from stl_lfd.optim.runs.prepare import PreparedRun
-from stl_lfd.optim.summary import Summary
+from stl_lfd.optim.summary import Summary, execution_of
 from stl_lfd.optim.trials import Outcome, Trial, best_trial
 
 
@@ -19,8 +19,11 @@ class Recorder:
     """Records each finished trial of a run: its line and signals, the best models when it
     improves on the best so far, and the summary."""
 
-    def __init__(self, prepared: PreparedRun) -> None:
+    def __init__(self, prepared: PreparedRun, executed_by: str | None = None) -> None:
+        """`executed_by`: how the trials it records are executed (default: as the task executes
+        them, `execution_of`); a run whose trials were executed in more ways says so."""
         self.prepared = prepared
+        self.executed_by = combined_execution(prepared.summary.executed_by, executed_by or execution_of(prepared.task))
         self.history = list(prepared.history)
         self.best = best_trial(self.history)
         self.wall_seconds = prepared.summary.wall_seconds
@@ -42,9 +45,16 @@ class Recorder:
     def summary(self) -> Summary:
         prepared = self.prepared
         initial = prepared.summary
-        return Summary.of(
-            prepared.task, prepared.space, initial.initial_robustness, self.history, self.wall_seconds, initial.initial_components, initial.executed_by or None
-        )
+        executed_by = self.executed_by if len(self.history) > len(prepared.history) else initial.executed_by or None
+        return Summary.of(prepared.task, prepared.space, initial.initial_robustness, self.history, self.wall_seconds, initial.initial_components, executed_by)
+
+
+def combined_execution(before: str, now: str) -> str:
+    """How a run's trials were executed, `before` (what its summary says) and `now`:
+    `pybullet, then stlopt ask/tell` when they differ."""
+    if not before or before == now or before.endswith(f", then {now}"):
+        return before or now
+    return f"{before}, then {now}"
 
 
 def finish_run(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None) -> Summary:

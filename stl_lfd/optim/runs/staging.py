@@ -19,7 +19,7 @@ from stl_lfd.errors import OutputError, StlLfdError
 from stl_lfd.files import folder_mode, write_atomically
 from stl_lfd.hsmm import HSMM, save_model
 from stl_lfd.optim.runs.directory import DESIGN_FILE, INPUTS_FILE, MODEL_FILE, SIGNALS_DIR, TRIALS_FILE, RunDirectory, check_new_run_path, model_file
-from stl_lfd.optim.runs.lock import RunLock
+from stl_lfd.optim.runs.lock import LOCK_FILE, RunLock
 from stl_lfd.optim.runs.records import Pending
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Task
@@ -29,10 +29,15 @@ ABANDONED_AFTER = 60.0  # s: a staging folder this old and unlocked was left by 
 
 
 def remove_abandoned(destination: Path) -> None:
-    """Remove the staging folders of `destination` that killed processes left behind (their
-    lock free, untouched for `ABANDONED_AFTER` seconds); one being built is locked and kept."""
+    """Remove the staging folders of `destination` that killed processes left behind: named as
+    `StagedRun` names them (`.NAME.` and `mkdtemp`'s 8 characters), holding a run's lock file,
+    the lock free and untouched for `ABANDONED_AFTER` seconds. One being built is locked and
+    kept, and any other hidden folder (`.NAME.backup`) is not ours."""
+    pattern = re.compile(rf"\.{re.escape(destination.name)}\.[a-z0-9_]{{8}}")
     for folder in destination.parent.glob(f".{glob.escape(destination.name)}.*"):
-        if not folder.is_dir() or time.time() - folder.stat().st_mtime < ABANDONED_AFTER:
+        if not (pattern.fullmatch(folder.name) and folder.is_dir() and (folder / LOCK_FILE).is_file()):
+            continue
+        if time.time() - folder.stat().st_mtime < ABANDONED_AFTER:
             continue
         try:
             lock = RunLock.acquire(folder, folder)
