@@ -14,6 +14,7 @@ degrees. `--demonstrated-yaws` turns the objects only within the demonstrations'
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 import warnings
 from pathlib import Path
@@ -55,9 +56,13 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seed", type=int, default=20261204, help="the placements' generator seed")
     parser.add_argument("--demonstrated-yaws", action="store_true", help="turn the objects only within the demonstrations' yaws")
     parser.add_argument("--backend", default="pybullet", help="the simulator")
+    parser.add_argument("--nullspace-posture", default=None, help="the arm's nullspace posture, rest or reference (default: the scene's)")
     arguments = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     skill = PlacedSkill.load(BEHAVIOUR, duration=36.0)
+    if arguments.nullspace_posture is not None:
+        control = dataclasses.replace(skill.scene.control, nullspace_posture=arguments.nullspace_posture)
+        skill = PlacedSkill(skill.models, skill.behaviour, dataclasses.replace(skill.scene, control=control), 36.0)
     successes, start, notes = 0, time.perf_counter(), []
     for index, placement in enumerate(placements(arguments.placements, arguments.seed, any_yaw=not arguments.demonstrated_yaws), start=1):
         try:
@@ -74,7 +79,7 @@ def main(argv: list[str] | None = None) -> None:
         [
             Row(
                 "shaft in the hole",
-                f"{arguments.placements} unseen placements, {'demonstrated' if arguments.demonstrated_yaws else 'any'} yaws",
+                f"{arguments.placements} unseen placements, {'demonstrated' if arguments.demonstrated_yaws else 'any'} yaws, {skill.scene.control.nullspace_posture} posture",
                 seconds,
                 None,
                 f"{successes} of {arguments.placements} (time: per placement)",

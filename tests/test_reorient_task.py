@@ -3,10 +3,12 @@ pick_reorient_insert, demos/pick_lying and demos/reorient_insert*, specs/phi3_re
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
-from stl_lfd.sim import load_scene
+from stl_lfd.sim import TrackingWarning, load_scene
 from stl_lfd.skill import PlacedSkill
 from stl_lfd.stl import Spec
 from tests.conftest import ROOT
@@ -60,3 +62,27 @@ def test_the_symmetric_shaft_and_hole_are_inserted_at_yaws_never_demonstrated():
     end = {name: values[-1] for name, values in placed.execute("pybullet", 100).signals.columns.items()}
     assert abs(end["shaft_x"] - 0.58) < 0.006 and abs(end["shaft_y"] - 0.22) < 0.006  # within the hole's clearance
     assert end["shaft_z"] - 0.06 < 0.06 and np.degrees(end["shaft_tilt"]) < 3.0  # its bottom below the holder's top, upright
+
+
+@pytest.mark.slow
+def test_the_references_nullspace_posture_keeps_the_arm_out_of_a_joint_limit():
+    """The first of bench_reorient's unseen placements (the holder turned by 120 degrees): with
+    the rest posture in its nullspace the compliant arm runs joint 2 into its limit and leaves
+    the shaft on the rim 14 cm from the hole's axis; with the reference's posture it inserts it."""
+    import dataclasses
+
+    from benchmarks.bench_reorient import placements
+    from benchmarks.physical import inserted
+    from stl_lfd.skill import placed_scene
+
+    skill = PlacedSkill.load(ROOT / "configs" / "behaviours" / "pick_reorient_insert.yaml", duration=36.0)
+    placement = placements(20, 20261204, any_yaw=True)[0]
+    ends = {}
+    for posture in ("rest", "reference"):
+        scene = dataclasses.replace(skill.scene, control=dataclasses.replace(skill.scene.control, nullspace_posture=posture))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", TrackingWarning)  # the rest posture's, as intended
+            rollout = PlacedSkill(skill.models, skill.behaviour, placed_scene(scene, placement), 36.0).execute("pybullet", 100)
+        ends[posture] = (inserted(rollout.signals, placement["holder"])[0], float(rollout.tracking_error.max()))
+    assert ends["rest"][0] is False and ends["rest"][1] > 0.03
+    assert ends["reference"][0] is True and ends["reference"][1] < 0.002

@@ -39,6 +39,10 @@ SINGULAR_DAMPING = 1e-4
 # nullspace: every second step costs half as much, and the tracking error of phi1's skill is
 # unchanged to 0.01 mm (the Jacobian itself is fresh at every step).
 REFRESH_EVERY = 2
+# How the nullspace posture is chosen (`NullspacePosture`), and how often (control steps at
+# 240 Hz) the reference's posture is solved for: 10 Hz.
+NULLSPACE_POSTURES = ("rest", "reference")
+POSTURE_EVERY = 24
 _EYE6, _EYE7 = np.eye(6), np.eye(7)
 
 
@@ -156,6 +160,7 @@ def impedance_torques(
     target_twist: np.ndarray,
     target_acceleration: np.ndarray,
     jacobian_rate_term: np.ndarray,
+    posture: np.ndarray = REST_POSTURE,
 ) -> np.ndarray:
     """`7` joint torques (Nm) of the law above, clipped to the limits.
 
@@ -168,6 +173,7 @@ def impedance_torques(
         target_twist, target_acceleration: `6` each, the reference's twist and its rate.
         jacobian_rate_term: `6`, dJ/dt dq: the part of the hand's acceleration that joint
             accelerations do not cause (without it the hand lags on curved paths).
+        posture: `7` joints the nullspace spring pulls towards (`NullspacePosture`).
     """
     jacobian = dynamics.jacobian
     wrench = (
@@ -175,9 +181,33 @@ def impedance_torques(
         - dynamics.damping @ (jacobian @ joint_velocities - target_twist)
         + dynamics.inertia @ (target_acceleration - jacobian_rate_term)
     )
-    posture = gains.nullspace_stiffness * (REST_POSTURE - joints) - 2.0 * math.sqrt(gains.nullspace_stiffness) * joint_velocities
-    torques = jacobian.T @ wrench + dynamics.nullspace @ posture + bias
+    spring = gains.nullspace_stiffness * (posture - joints) - 2.0 * math.sqrt(gains.nullspace_stiffness) * joint_velocities
+    torques = jacobian.T @ wrench + dynamics.nullspace @ spring + bias
     return np.minimum(np.maximum(torques, gains.lower_limits), gains.upper_limits)  # np.clip costs more on 7 values
+
+
+class NullspacePosture:
+    """The joints the nullspace spring pulls towards: the fixed `rest` posture (franka's example
+    controller holds its initial one), or (`reference`) the arm's inverse kinematics for the
+    reference, solved every `POSTURE_EVERY` control steps. With the rest posture, a hand turned
+    far from it (the re-orient-and-insert task with the holder turned by 120 degrees) can drag
+    the arm into a joint limit, where it no longer follows the reference; the reference's own
+    posture keeps the arm where a position-controlled arm's inverse kinematics would hold it."""
+
+    def __init__(self, mode: str = "rest") -> None:
+        self.mode = mode
+        self.restart()
+
+    def restart(self) -> None:
+        self.posture, self.steps = REST_POSTURE, 0
+
+    def at(self, solve: Callable[[], np.ndarray]) -> np.ndarray:
+        """`7`: the posture for this control step; `solve()` gives the inverse kinematics of
+        the step's target (called only when the posture is refreshed)."""
+        if self.mode == "reference" and self.steps % POSTURE_EVERY == 0:
+            self.posture = np.asarray(solve(), dtype=float)
+        self.steps += 1
+        return self.posture
 
 
 def reference_twists(times: np.ndarray, positions: np.ndarray, orientations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

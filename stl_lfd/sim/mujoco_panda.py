@@ -31,6 +31,7 @@ from stl_lfd.sim.world import GRAVITY, FrameTracker, Target, external_wrench, lo
 PHYSICS_STEP = TIME_STEP / PHYSICS_STEPS
 KEPT_WORLDS = 4  # compiled scenes a backend keeps (rollouts over many placements keep a few)
 IK_ITERATIONS = 200
+POSTURE_ITERATIONS = 20  # from the arm's posture now, a few steps reach the reference's (10 Hz)
 OPENGL_ADVICE = "install its OpenGL library (Debian: libegl1 for MUJOCO_GL=egl, libosmesa6 for osmesa) or set MUJOCO_GL=egl"
 
 
@@ -55,6 +56,8 @@ class MujocoWorld:
         self.data = mj.MjData(model)
         self.gains = scene.control.impedance
         self.dynamics = RefreshedDynamics(self.gains)
+        self.posture = scene.control.posture()
+        self._scratch: Any = None  # the inverse kinematics' own state
         arm = [model.joint(name).id for name in ARM_JOINTS]
         if [model.jnt_dofadr[joint] for joint in arm] != list(range(7)) or [model.jnt_qposadr[joint] for joint in arm] != list(range(7)):
             raise ExecutionError("MuJoCo model: the arm's joints are not its first seven degrees of freedom")
@@ -95,16 +98,23 @@ class MujocoWorld:
         mj.mj_forward(model, data)
         self.target, self.load = target, None
         self.dynamics.restart()
+        self.posture.restart()
         self._wrench = self._measured_wrench()
 
-    def _inverse_kinematics(self, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
+    def _inverse_kinematics(
+        self, position: np.ndarray, orientation: np.ndarray, start: np.ndarray = REST_POSTURE, iterations: int = IK_ITERATIONS
+    ) -> np.ndarray:
         """Arm joints that put the grasp target at `position` and `orientation`: damped least
-        squares from the rest posture, drawn towards it in the nullspace, within joint limits."""
+        squares from `start` (the rest posture), drawn towards the rest posture in the
+        nullspace, within joint limits, in at most `iterations` steps."""
         mj, model = self.mj, self.model
-        data = mj.MjData(model)
-        data.qpos[:7] = REST_POSTURE
+        if self._scratch is None:
+            self._scratch = mj.MjData(model)
+        data = self._scratch
+        data.qpos[:] = 0.0
+        data.qpos[:7] = start
         jacobian = np.zeros((6, model.nv))
-        for _ in range(IK_ITERATIONS):
+        for _ in range(iterations):
             mj.mj_kinematics(model, data)
             mj.mj_comPos(model, data)
             error = -pose_error(data.site_xpos[self.grasp_target], self._site_orientation(data), position, orientation)
@@ -138,7 +148,10 @@ class MujocoWorld:
             centre = data.xipos[self.movable[self.load]]
             bias += load_torques(dynamics.jacobian, data.site_xpos[self.grasp_target], centre, self.masses[self.load])
         error = pose_error(data.site_xpos[self.grasp_target], self._site_orientation(data), target.position, target.orientation)
-        data.ctrl[:7] = impedance_torques(self.gains, dynamics, bias, data.qpos[:7], data.qvel[:7], error, target.twist, target.acceleration, rate_term)
+        posture = self.posture.at(lambda: self._inverse_kinematics(target.position, target.orientation, data.qpos[:7], POSTURE_ITERATIONS))
+        data.ctrl[:7] = impedance_torques(
+            self.gains, dynamics, bias, data.qpos[:7], data.qvel[:7], error, target.twist, target.acceleration, rate_term, posture
+        )
         data.ctrl[7:9] = target.opening / 2
         mj.mj_step2(model, data)
         for _ in range(PHYSICS_STEPS - 1):

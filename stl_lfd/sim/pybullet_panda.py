@@ -111,6 +111,7 @@ class PandaWorld:
         self._make_compliant()
         self.gains = scene.control.impedance
         self.dynamics = RefreshedDynamics(self.gains)
+        self.posture = scene.control.posture()
         self.objects = {item.name: self._add_object(item) for item in scene.objects}
         self.movable = {item.name: self.objects[item.name] for item in scene.objects if item.mass > 0}
         self.masses = {item.name: item.mass for item in scene.objects}
@@ -191,6 +192,7 @@ class PandaWorld:
         client.performCollisionDetection()
         self.load, self.target, self._previous_jacobian, self._started = None, target, None, False
         self.dynamics.restart()
+        self.posture.restart()
         self._accelerations[:] = 0.0
         self._velocities = None
 
@@ -211,9 +213,10 @@ class PandaWorld:
         previous_jacobian = self._previous_jacobian if self._previous_jacobian is not None else jacobian
         rate_term = (jacobian - previous_jacobian) @ arm_velocities / TIME_STEP  # dJ/dt dq
         position, orientation = self.hand_pose()
+        posture = self.posture.at(lambda: self._inverse_kinematics(target.position, target.orientation))
         torques = impedance_torques(
             self.gains, dynamics, bias, np.array(joints[:7]), arm_velocities,
-            pose_error(position, orientation, target.position, target.orientation), target.twist, target.acceleration, rate_term,
+            pose_error(position, orientation, target.position, target.orientation), target.twist, target.acceleration, rate_term, posture,
         )  # fmt: skip
         client.setJointMotorControlArray(self.robot, ARM_JOINTS, self.pb.TORQUE_CONTROL, forces=torques.tolist())
         finger_force = self.scene.control.finger_force

@@ -16,7 +16,7 @@ import stl_lfd.rotations as rotations
 from stl_lfd.choices import RECORDED_SIGNALS
 from stl_lfd.errors import ConfigError
 from stl_lfd.poses import Pose
-from stl_lfd.sim.impedance import PANDA_TORQUE_LIMITS, Impedance
+from stl_lfd.sim.impedance import PANDA_TORQUE_LIMITS, Impedance, NullspacePosture
 from stl_lfd.sim.safety import Safety
 
 SHAPES = ("box", "cylinder", "sphere")
@@ -38,6 +38,8 @@ class Control:
         torque_limits: Nm, joints 1-7 (the Panda's: 87 for 1-4, 12 for 5-7).
         finger_force: N each finger squeezes with when it closes on an object (the Franka
             Hand grasps with up to 70 N continuous).
+        nullspace_posture: what the nullspace spring pulls towards: `rest`, a fixed posture,
+            or `reference`, the arm's inverse kinematics for the reference (`NullspacePosture`).
     """
 
     translational_stiffness: float = 400.0
@@ -46,10 +48,14 @@ class Control:
     nullspace_stiffness: float = 10.0
     torque_limits: tuple[float, ...] = PANDA_TORQUE_LIMITS
     finger_force: float = 20.0
+    nullspace_posture: str = "rest"
 
     @property
     def impedance(self) -> Impedance:
         return Impedance(self.translational_stiffness, self.rotational_stiffness, self.damping_ratio, self.nullspace_stiffness, self.torque_limits)
+
+    def posture(self) -> NullspacePosture:
+        return NullspacePosture(self.nullspace_posture)
 
 
 @dataclass(frozen=True)

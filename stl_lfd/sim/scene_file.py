@@ -16,7 +16,7 @@ from typing import Any
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_SYMMETRY
 from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment, parse_pose, pose_from_values
-from stl_lfd.sim.impedance import PANDA_TORQUE_LIMITS
+from stl_lfd.sim.impedance import NULLSPACE_POSTURES, PANDA_TORQUE_LIMITS
 from stl_lfd.sim.safety import Safety
 from stl_lfd.sim.scene import SHAPES, Camera, Control, Scene, SceneFrame, SceneObject, check_area
 from stl_lfd.yamlfile import check_keys, number, read_yaml, shown, vector
@@ -184,7 +184,7 @@ CONTROL_MAXIMA = {
     "nullspace_stiffness": 100.0,
     "finger_force": 140.0,
 }
-CONTROL_KEYS = (*CONTROL_MAXIMA, "torque_limits")
+CONTROL_KEYS = (*CONTROL_MAXIMA, "torque_limits", "nullspace_posture")
 # Keys of the position-controlled arm that impedance control replaced, and what replaces them.
 RETIRED_CONTROL_KEYS = {"position_gain": "translational_stiffness and rotational_stiffness", "arm_forces": "torque_limits"}
 
@@ -207,6 +207,10 @@ def _parse_control(data: Any, path: Path) -> Control:
                 f"{path}: 'control.torque_limits' must be positive and at most the Panda's ({', '.join(f'{limit:g}' for limit in PANDA_TORQUE_LIMITS)} Nm)"
             )
         values["torque_limits"] = limits
+    if "nullspace_posture" in data:
+        if data["nullspace_posture"] not in NULLSPACE_POSTURES:
+            raise ConfigError(f"{path}: 'control.nullspace_posture' must be one of {', '.join(NULLSPACE_POSTURES)} (got {shown(data['nullspace_posture'])})")
+        values["nullspace_posture"] = data["nullspace_posture"]
     return Control(**values)
 
 
