@@ -66,6 +66,7 @@ def _print_warning(message, category, filename, lineno, file=None, line=None) ->
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 SIGNAL_SUFFIXES = (".csv",)
 INTERRUPTED = 130  # what a shell reports for a process that SIGINT ended
+_as_program = False  # run as the `stlopt` program (`main`), not called in-process (tests, the API)
 PLACE_HELP = "Place an object frame of the scene: NAME=x,y[,z[,yaw]] (metres, yaw in radians; z and yaw default to the scene's). Repeat for several frames."
 COMMAND_HELP = "With --backend command: the executor to run, with {reference} and {signals} for the two CSV paths (no shell)."
 COMMAND_TIMEOUT_HELP = "Seconds after which the executor is stopped and the trial fails (default: the task's, or 600)."
@@ -93,13 +94,17 @@ def user_errors(on_interrupt: str = "interrupted") -> Iterator[None]:
             raise typer.Exit(code=error.exit_code) from None
         except KeyboardInterrupt:
             print(on_interrupt, file=sys.stderr)
+            if _as_program:  # a second Ctrl-C while the run closes ends it by SIGINT at once, as `main` would
+                signal.signal(signal.SIGINT, signal.SIG_DFL)
             raise typer.Exit(code=INTERRUPTED) from None
 
 
 def main() -> None:
     """The `stlopt` program. After Ctrl-C it dies by SIGINT (not a plain exit 130), so that a
     shell loop of runs stops instead of going on to the next one."""
+    global _as_program
     keep_freed_memory()
+    _as_program = True
     try:
         app()
     except OSError as error:  # what no command turned into an error of its own: stdout on a full disk (/dev/full)
