@@ -569,11 +569,12 @@ def optimize(
         stlopt optimize --spec my.stl --demos demos/three_regions
     """
     from stl_lfd.optim import Overrides, finish_run, resume_run, start_run
+    from stl_lfd.optim.default_task import task_to_run
     from stl_lfd.optim.runs.resume import inputs_record
     from stl_lfd.progress import TrialPrinter
 
     with user_errors():
-        file_task = _task_to_run(task_file, spec, demos, model)
+        file_task = task_to_run(task_file, spec, demos, model, say=lambda message: print(message, file=sys.stderr))
         given = Overrides(
             spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None,
             workers=workers, command=_command(command, command_timeout, file_task.command), placements=_placements(file_task.scene, place),
@@ -596,28 +597,6 @@ def optimize(
             printer.stop()
         printer.done(summary)
     print(json.dumps(summary.to_json(), indent=2))
-
-
-def _task_to_run(task_file: Path | None, spec: Path | None, demos: Path | None, model: Path | None):
-    """The task file's task; without one, the task file that names `spec`, or a default task
-    for `spec` on `demos` or `model` (`optim/default_task.py`)."""
-    from stl_lfd.optim import load_task
-    from stl_lfd.optim.default_task import default_task, task_file_naming
-
-    if task_file is not None:
-        if demos is not None or model is not None:
-            raise ConfigError("--demos and --model build a task without a task file; the task file names its skill")
-        return load_task(task_file)
-    if spec is None:
-        raise ConfigError("give a task file (e.g. configs/phi1.yaml), or --spec SPEC")
-    if not spec.is_file():
-        raise ConfigError(f"{spec}: no such spec file")
-    found = task_file_naming(spec) if demos is None and model is None else None
-    if found is not None:
-        shown = os.path.relpath(found) if found.is_relative_to(Path.cwd()) else found
-        print(f"using the task file {shown}, which names {spec}", file=sys.stderr)
-        return load_task(found)
-    return default_task(spec, demos, model)
 
 
 @app.command(cls=_PlainUsage)

@@ -13,11 +13,12 @@ longer, rounded up to a whole second.
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from stl_lfd.errors import ConfigError
-from stl_lfd.optim.task import Task, parse_task
+from stl_lfd.optim.task import Task, load_task, parse_task
 from stl_lfd.sim.registry import DEFAULT_BACKEND
 from stl_lfd.yamlfile import read_yaml
 
@@ -102,3 +103,22 @@ def _horizon(spec: Path) -> float:
 
     parsed = load_spec(spec)
     return horizon(resolve(parsed))
+
+
+def task_to_run(task_file: Path | None, spec: Path | None, demos: Path | None, model: Path | None, say: Callable[[str], None] = lambda message: None) -> Task:
+    """What `stlopt optimize` runs: the task file's task; without one, the task file that names
+    `spec` (said through `say`), or a default task for `spec` on `demos` or `model`."""
+    if task_file is not None:
+        if demos is not None or model is not None:
+            raise ConfigError("--demos and --model build a task without a task file; the task file names its skill")
+        return load_task(task_file)
+    if spec is None:
+        raise ConfigError("give a task file (e.g. configs/phi1.yaml), or --spec SPEC")
+    if not Path(spec).is_file():
+        raise ConfigError(f"{spec}: no such spec file")
+    found = task_file_naming(spec) if demos is None and model is None else None
+    if found is not None:
+        shown = os.path.relpath(found) if found.is_relative_to(Path.cwd()) else found
+        say(f"using the task file {shown}, which names {spec}")
+        return load_task(found)
+    return default_task(spec, demos, model)

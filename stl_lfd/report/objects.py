@@ -34,25 +34,10 @@ def corners(item: SceneObject) -> np.ndarray:
 
 
 def outline(points: np.ndarray) -> np.ndarray:
-    """The convex hull of `N x 2` points, counter-clockwise (Andrew's monotone chain)."""
-    ordered = sorted(set(map(tuple, np.round(points, 9))))
-    if len(ordered) < 3:
-        return np.array(ordered)
+    """The convex hull of `N x 2` points, counter-clockwise."""
+    from scipy.spatial import ConvexHull
 
-    def half(sequence):
-        hull: list[tuple[float, float]] = []
-        for point in sequence:
-            while len(hull) >= 2 and _turn(hull[-2], hull[-1], point) <= 0:
-                hull.pop()
-            hull.append(point)
-        return hull[:-1]
-
-    return np.array(half(ordered) + half(ordered[::-1]))
-
-
-def _turn(origin, first, second) -> float:
-    """The z of (first - origin) x (second - origin): positive for a left turn."""
-    return (first[0] - origin[0]) * (second[1] - origin[1]) - (first[1] - origin[1]) * (second[0] - origin[0])
+    return points[ConvexHull(points).vertices]
 
 
 def fixed_frame_objects(run: RunData) -> list[SceneObject]:
@@ -84,8 +69,7 @@ def moving_frames(run: RunData) -> list[str]:
     """The names of the frames that move with an object and whose positions the run recorded."""
     if run.scene is None:
         return []
-    recorded = set().union(*(table.columns for table in run.signals.values())) if run.signals else set()
-    return [frame.name for frame in run.scene.moving_frames if set(frame.signals) <= recorded]
+    return [frame.name for frame in run.scene.moving_frames if set(frame.signals) <= recorded_signals(run)]
 
 
 def draw_object_paths(axes, run: RunData, across: str, up: str, trials: dict[int, tuple]) -> None:
@@ -106,8 +90,13 @@ def constrained_object_signals(run: RunData) -> list[str]:
     if run.scene is None:
         return []
     prefixes = tuple(f"{frame.name}_" for frame in run.scene.frames)
-    recorded = set().union(*(table.columns for table in run.signals.values())) if run.signals else set()
+    recorded = recorded_signals(run)
     return [signal for signal in run.thresholds if signal.startswith(prefixes) and signal in recorded]
+
+
+def recorded_signals(run: RunData) -> set[str]:
+    """The signals any of the run's trials recorded."""
+    return set().union(*(table.columns for table in run.signals.values()))
 
 
 def draw_thresholds(axes, thresholds: list[Threshold]) -> None:

@@ -206,11 +206,11 @@ class MujocoWorld:
         self.load = None if item is None else item.name
 
     def held_frames(self) -> np.ndarray:
-        contacts = self.data.contact
-        bodies = self.model.geom_bodyid
-        pairs = {frozenset(pair) for pair in zip(bodies[contacts.geom1].tolist(), bodies[contacts.geom2].tolist())}
-        held = {name for name, body in self.movable.items() if all(frozenset((finger, body)) in pairs for finger in self.finger_bodies)}
-        return self.frames.held(held)
+        if not self.movable:  # free space: nothing to hold, and this runs at every step
+            return self.frames.held(set())
+        first, second = self.model.geom_bodyid[self.data.contact.geom1], self.model.geom_bodyid[self.data.contact.geom2]
+        touched = [set(second[first == finger].tolist()) | set(first[second == finger].tolist()) for finger in self.finger_bodies]
+        return self.frames.held({name for name, body in self.movable.items() if all(body in bodies for bodies in touched)})
 
     def render(self, camera: Camera) -> np.ndarray:
         """`height x width x 3` uint8 image from the scene camera, rendered offscreen."""
