@@ -21,6 +21,7 @@ from stl_lfd.optim.trials import Outcome
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim import Backend, BackendOptions, CommandBackend, Reference, Scene, load_scene, new_backend
+from stl_lfd.sim.grasp import GraspModel
 from stl_lfd.sim.tracking import TrackingModel
 from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour
 from stl_lfd.skill.placed import PlacedSkill, placed_scene
@@ -71,21 +72,23 @@ class SkillObjective:
     def __call__(self, x: np.ndarray, trial: int = 0) -> Outcome:
         return self.evaluate(self.space.apply(self.models, x), trial)
 
-    def planned(self, tracking: TrackingModel | None = None) -> "SkillObjective":
+    def planned(self, tracking: TrackingModel | None = None, grasp: GraspModel | None = None) -> "SkillObjective":
         """This objective on the kinematic backend: it scores the plan (the reference itself),
-        or with `tracking` the plan's execution as the tracking model predicts it."""
+        or with `tracking` the plan's execution as the tracking model predicts it (carried
+        objects where `grasp` says they sit in the hand)."""
         from stl_lfd.sim.kinematic import KinematicBackend
         from stl_lfd.sim.tracking import PredictingBackend
 
         plan = copy.copy(self)
-        plan.backend = KinematicBackend() if tracking is None else PredictingBackend(tracking)
+        plan.backend = KinematicBackend() if tracking is None else PredictingBackend(tracking, grasp)
         return plan
 
-    def plan_score(self, tracking: TrackingModel | None = None) -> Callable[[np.ndarray], np.ndarray]:
+    def plan_score(self, tracking: TrackingModel | None = None, grasp: GraspModel | None = None) -> Callable[[np.ndarray], np.ndarray]:
         """`b x d` points -> `b x o`: the plan's robustness of each part, then route, at each
         point (the prior of method `plan`), the points' plans retrieved together (and, with
-        `tracking`, executed as it predicts); raises when a point has no plan."""
-        planned, routes = self.planned(tracking), self.composition.route_names
+        `tracking`, executed as it predicts, with `grasp`'s objects in the hand); raises when a
+        point has no plan."""
+        planned, routes = self.planned(tracking, grasp), self.composition.route_names
 
         def score(points: np.ndarray) -> np.ndarray:
             outcomes = planned.execute_all(self.plan_references(points, keep=tracking is not None))

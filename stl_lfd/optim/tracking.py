@@ -10,7 +10,7 @@ The latest model is kept in `tracking.json` for the report and the API.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -23,6 +23,7 @@ from stl_lfd.optim.objective import SkillObjective
 from stl_lfd.optim.space import SearchSpace
 from stl_lfd.optim.trials import Trial
 from stl_lfd.signals import SignalTable
+from stl_lfd.sim.grasp import GraspModel, InHand, carried_poses
 from stl_lfd.sim.tracking import Execution, TrackingModel
 
 TRACKING_FILE = "tracking.json"
@@ -48,47 +49,53 @@ class RunTracking:
         self.objective, self.models, self.space = objective, models, space
         self.recorded_signals, self.folder = recorded_signals, folder
         self._executions: dict[int, Execution | None] = {}
-        self._latest: tuple[tuple[int, ...], TrackingModel] | None = None
+        self._carried: dict[int, dict[str, tuple[InHand, InHand]]] = {}  # trial -> where its objects sat in the hand
+        self._latest: tuple[tuple[int, ...], TrackingModel, GraspModel] | None = None
 
-    def model(self, history: Sequence[Trial]) -> tuple[tuple[int, ...], TrackingModel]:
-        """The model fitted on the unoptimised skill's execution and those of `history`'s
-        successful trials, and the trial numbers it was fitted on (its identity)."""
+    def model(self, history: Sequence[Trial]) -> tuple[tuple[int, ...], TrackingModel, GraspModel]:
+        """The tracking and grasp models fitted on the unoptimised skill's execution and those of
+        `history`'s successful trials, and the trial numbers they were fitted on (their identity)."""
         numbers = tuple(
             number for number in [0, *(trial.trial for trial in history if trial.robustness is not None)] if self._execution(number, history) is not None
         )
         if self._latest is None or self._latest[0] != numbers:
             executions = [self._executions[number] for number in numbers]
             model = TrackingModel().fit(executions, plan_within=FOLLOWS_THE_PLAN) if numbers else TrackingModel()
-            self._latest = (numbers, model)
-            self._write(numbers, model)
+            grasp = GraspModel().fit_poses([self._carried[number] for number in numbers])
+            self._latest = (numbers, model, grasp)
+            self._write(numbers, model, grasp)
         return self._latest
 
     def plan_score(self, history: Sequence[Trial]) -> tuple[tuple[int, ...] | None, Callable[[np.ndarray], np.ndarray] | None]:
-        """The plan score (`SkillObjective.plan_score`) through the model of `history`, and the
-        model's identity (the same identity, the same score); `(None, None)` while the robot
-        follows the plan within FOLLOWS_THE_PLAN (the plan itself is the prediction)."""
-        numbers, model = self.model(history)
-        if not used(model):
+        """The plan score (`SkillObjective.plan_score`) through the models of `history`, and the
+        models' identity (the same identity, the same score); `(None, None)` while the robot
+        follows the plan within FOLLOWS_THE_PLAN and holds objects as it grasped them (the plan
+        itself is the prediction)."""
+        numbers, model, grasp = self.model(history)
+        if not used(model, grasp):
             return None, None
-        return numbers, self.objective.plan_score(model)
+        return numbers, self.objective.plan_score(model, grasp)
 
     def _execution(self, number: int, history: Sequence[Trial]) -> Execution | None:
         if number not in self._executions:
             x = self.space.initial if number == 0 else next(trial.x for trial in history if trial.trial == number)
             signals = self.recorded_signals(number)
             self._executions[number] = execution_of(self.objective, self.space.apply(self.models, x), signals) if signals is not None else None
+            self._carried[number] = carried_poses(signals, self.objective.scene) if signals is not None else {}
         return self._executions[number]
 
-    def _write(self, numbers: tuple[int, ...], model: TrackingModel) -> None:
+    def _write(self, numbers: tuple[int, ...], model: TrackingModel, grasp: GraspModel) -> None:
         if self.folder is not None:
-            record = {"trials": list(numbers), "used": used(model), **model.to_dict()}
+            record = {"trials": list(numbers), "used": used(model, grasp), **model.to_dict(), "grasp": grasp.to_dict()}
             write_atomically(self.folder / TRACKING_FILE, json.dumps(record, indent=2) + "\n")
 
 
-def used(model: TrackingModel) -> bool:
-    """Whether method plan scores plans through `model`: when the robot departs from the plan
-    by more than FOLLOWS_THE_PLAN on some axis and the model predicts better than the plan."""
-    return bool(np.max(model.plan_rms_) > FOLLOWS_THE_PLAN and model.kind_ != "plan")
+def used(model: TrackingModel, grasp: GraspModel | None = None) -> bool:
+    """Whether method plan scores plans through `model` and `grasp`: when the robot departs
+    from the plan by more than FOLLOWS_THE_PLAN on some axis and the model predicts better than
+    the plan, or when it holds an object elsewhere than where it grasped it (`GraspModel.rigid`)."""
+    departs = bool(np.max(model.plan_rms_) > FOLLOWS_THE_PLAN and model.kind_ != "plan")
+    return departs or (grasp is not None and not grasp.rigid)
 
 
 def execution_of(objective: SkillObjective, models: dict[str, HSMM], signals: SignalTable) -> Execution:
@@ -99,12 +106,14 @@ def execution_of(objective: SkillObjective, models: dict[str, HSMM], signals: Si
 
 @dataclass(frozen=True)
 class RunTrackingRecord:
-    """What `tracking.json` holds: the trials (0: the unoptimised skill) the model was fitted
-    on, the model, and whether method plan scored its plans through it."""
+    """What `tracking.json` holds: the trials (0: the unoptimised skill) the models were fitted
+    on, the tracking model, whether method plan scored its plans through them, and the grasp
+    model (empty in runs recorded before objects' orientations were)."""
 
     trials: list[int]
     model: TrackingModel
     used: bool
+    grasp: GraspModel = field(default_factory=GraspModel)
 
 
 def read_tracking(folder: Path) -> RunTrackingRecord | None:
@@ -114,7 +123,7 @@ def read_tracking(folder: Path) -> RunTrackingRecord | None:
         return None
     try:
         data = json.loads(path.read_text())
-        model = TrackingModel.from_dict(data)
-        return RunTrackingRecord([int(number) for number in data["trials"]], model, bool(data.get("used", used(model))))
+        model, grasp = TrackingModel.from_dict(data), GraspModel.from_dict(data.get("grasp", {}))
+        return RunTrackingRecord([int(number) for number in data["trials"]], model, bool(data.get("used", used(model, grasp))), grasp)
     except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
         raise RunError(f"{path}: damaged ({getattr(error, 'msg', error)}); delete it and the next trial writes it anew") from None

@@ -79,6 +79,10 @@ def signal_columns(steps: Steps, scene: Scene, times: np.ndarray) -> dict[str, n
     for index, frame in enumerate(scene.frames):
         columns[frame.tilt_signal] = np.interp(times, steps.times, tilts[:, index])
     columns.update({name: at(values) for name, values in outcome_columns(steps, scene).items()})
+    index = {frame.name: number for number, frame in enumerate(scene.frames)}
+    for frame in scene.moving_frames:
+        turns = at(rotations.continuous(steps.frame_orientations[:, index[frame.name]]))
+        columns.update(zip(frame.orientation_signals, (turns / np.linalg.norm(turns, axis=1, keepdims=True)).T))
     return columns
 
 

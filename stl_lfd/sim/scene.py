@@ -180,6 +180,14 @@ class SceneFrame:
         return (f"{self.name}_speed", f"{self.name}_held")
 
     @property
+    def orientation_signals(self) -> tuple[str, str, str, str]:
+        """For a frame that moves with a movable object: its object's orientation, a unit
+        quaternion in the base frame, scalar last (what a grasp model learns the object's pose
+        in the hand from)."""
+        qx, qy, qz, qw = (f"{self.name}_{component}" for component in rotations.QUATERNION_COLUMNS)
+        return (qx, qy, qz, qw)
+
+    @property
     def hole_signals(self) -> tuple[str, str]:
         """For a frame that goes `into` a hole: how deep its object's lowest point is below the
         rim (m, negative above it), and the horizontal distance (m) from the object's centre
@@ -242,13 +250,14 @@ class Scene:
     @property
     def recorded_signals(self) -> tuple[str, ...]:
         """What a rollout in this scene records: `RECORDED_SIGNALS`, each frame's position, each
-        frame's tilt, then the speed and held flag of each frame that moves with a movable object
-        (`moving_frames`), then the depth and offset of each frame that goes into a hole."""
+        frame's tilt, then the speed, held flag and orientation of each frame that moves with a
+        movable object (`moving_frames`), then the depth and offset of each frame that goes into
+        a hole."""
         return (
             RECORDED_SIGNALS
             + tuple(signal for frame in self.frames for signal in frame.signals)
             + tuple(frame.tilt_signal for frame in self.frames)
-            + tuple(signal for frame in self.moving_frames for signal in frame.motion_signals)
+            + tuple(signal for frame in self.moving_frames for signal in frame.motion_signals + frame.orientation_signals)
             + tuple(signal for frame in self.frames if frame.into for signal in frame.hole_signals)
         )
 

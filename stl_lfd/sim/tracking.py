@@ -28,6 +28,7 @@ from scipy.signal import lfilter
 
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.backend import Capabilities
+from stl_lfd.sim.grasp import GraspModel
 from stl_lfd.sim.kinematic import KinematicBackend
 from stl_lfd.sim.reference import Reference, Rollout, recording_times
 from stl_lfd.sim.scene import Scene
@@ -262,12 +263,13 @@ class PredictingBackend(KinematicBackend):
     """The kinematic backend with the robot's tracking: it records what `model` predicts a robot
     does when it executes the reference. The hand's positions are the prediction; orientation,
     gripper, grasps and releases follow the robot's clock (`model.clock_`), and carried objects
-    move with the predicted hand."""
+    move with the predicted hand, where `grasp` (a `GraspModel`) says they sit in it."""
 
     capabilities = Capabilities()  # a prediction of a robot, not the plan itself
 
-    def __init__(self, model: TrackingModel) -> None:
+    def __init__(self, model: TrackingModel, grasp: GraspModel | None = None) -> None:
         self.model = model
+        self.in_hand = grasp.in_hand_ if grasp is not None else None
 
     def run(self, reference: Reference, scene: Scene, rate: float, observer: Callable | None = None) -> Rollout:
         predicted = super().run(self.predicted(reference, rate), scene, rate, observer)

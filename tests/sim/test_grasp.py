@@ -6,8 +6,10 @@ import warnings
 import numpy as np
 import pytest
 
+import stl_lfd.rotations as rotations
 from stl_lfd.errors import ExecutionError
 from stl_lfd.sim import Reference, TrackingWarning, execute, load_scene
+from stl_lfd.sim.grasp import GraspModel
 
 SCENE = load_scene("pick_insert")
 GRASP = np.array([0.45, -0.25, 0.11])
@@ -95,6 +97,11 @@ def test_the_outcome_signals_see_the_shaft_held_carried_and_let_go_in_the_hole(a
     assert columns["shaft_speed"][times > 12.0].max() < 0.01  # at rest once let go
     assert columns["shaft_depth"][-1] == pytest.approx(0.04, abs=0.003)  # its bottom on the table, 4 cm below the rim
     assert columns["shaft_offset"][-1] < 0.006
+    turns = np.column_stack([columns[f"shaft_{component}"] for component in ("qx", "qy", "qz", "qw")])
+    assert np.allclose(np.linalg.norm(turns, axis=1), 1.0) and np.allclose(rotations.uprightness(turns), columns["shaft_tilt"], atol=1e-3)
+    # a firm grasp of an upright shaft by a hand pointing down: it sits in the hand as it was taken
+    grasp = GraspModel().fit([rollout.signals], SCENE)
+    assert grasp.departure_["shaft"][0] < 0.003 and grasp.departure_["shaft"][1] < 0.05
 
 
 @pytest.mark.slow
