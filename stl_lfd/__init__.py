@@ -10,8 +10,9 @@ The public API, loaded on first use (so `import stl_lfd` loads neither torch nor
   `backend="command"`), `read_reference_csv`;
 - optimisation: `optimize` -> `Result`, with `Parameters`, `MeanParameters`,
   `DurationParameters` and `Optimizer`; `load_task` for task files;
-- how a robot tracks: `TrackingModel` (`fit` on `Execution`s, `predict`), `read_tracking` (a
-  run's `tracking.json`).
+- how a robot tracks: `TrackingModel` (`fit` on `Execution`s, `predict`), `GraspModel` (where
+  a carried object sits in the hand, `fit` on recorded signals), `read_tracking` (a run's
+  `tracking.json`).
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ _HOMES = {
     "load_task": "stl_lfd.optim.task",
     "TrackingModel": "stl_lfd.sim.tracking",
     "Execution": "stl_lfd.sim.tracking",
+    "GraspModel": "stl_lfd.sim.grasp",
     "read_tracking": "stl_lfd.optim.tracking",
 }
 
