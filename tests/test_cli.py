@@ -125,7 +125,7 @@ def test_help_fits_80_columns_with_whole_examples_and_plain_types():
 def test_robustness_loads_numpy_with_one_blas_thread_unless_the_user_chose(chosen, expected):
     # the command's own start: `_one_blas_thread` runs before the evaluation loads numpy
     code = (
-        "import stl_lfd.cli as cli; cli._one_blas_thread(); import numpy, threadpoolctl; "
+        "import stl_lfd.cli.program as program; program.one_blas_thread(); import numpy, threadpoolctl; "
         "print(max(pool['num_threads'] for pool in threadpoolctl.threadpool_info() if pool['internal_api'] == 'openblas'))"
     )
     env = {name: value for name, value in os.environ.items() if name != "OPENBLAS_NUM_THREADS"} | ({"OPENBLAS_NUM_THREADS": chosen} if chosen else {})

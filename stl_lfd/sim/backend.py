@@ -41,6 +41,16 @@ class Capabilities:
     measures_force: bool = False
     needs_command: bool = False
 
+    def describe_rollout(self, recorded: float, elapsed: float, tracking_rms: float, tracking_max: float) -> str:
+        """How a rollout of `recorded` seconds went, taking `elapsed` seconds, with the hand
+        `tracking_rms`/`tracking_max` (m) off its reference: one phrase for the user."""
+        tracking = f"tracking error RMS {1000 * tracking_rms:.2f} mm, worst {1000 * tracking_max:.2f} mm"
+        if self.plays_the_plan:  # it plays the reference back: no speed or tracking to speak of
+            return f"{recorded:.2f} s of the reference played back (no dynamics)"
+        if self.simulates:
+            return f"{recorded:.2f} s simulated in {elapsed:.2f} s ({recorded / max(elapsed, 1e-9):.0f}x real time); {tracking}"
+        return f"{recorded:.2f} s executed by the command in {elapsed:.2f} s; {tracking}"
+
 
 @dataclass(frozen=True)
 class BackendOptions:

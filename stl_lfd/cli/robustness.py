@@ -1,0 +1,45 @@
+"""`stlopt robustness`: the robustness of a recorded signal."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import typer
+
+from stl_lfd.cli.options import SemanticsOption
+from stl_lfd.cli.program import PlainUsage, app, one_blas_thread, user_errors
+
+
+@app.command(cls=PlainUsage)
+def robustness(
+    spec: Path = typer.Argument(..., metavar="SPEC", help="STL specification file (.stl)."),
+    signal_csv: str = typer.Argument(..., metavar="SIGNAL_CSV", help="Signal CSV with a time column t; '-' reads stdin."),
+    semantics: SemanticsOption = typer.Option(SemanticsOption.classic, help="classic space robustness or the paper's new robustness."),
+    nu: float = typer.Option(1.0, help="Sharpness of the new robustness (> 0); larger is closer to classic."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object instead of the bare number."),
+) -> None:
+    """Print the robustness of a recorded signal with respect to a specification.
+
+    The robustness is the value at the first sample; it is positive exactly when the signal
+    satisfies the specification. Without --json, stdout gets the number and stderr a verdict
+    naming the semantics. The default is the classic robustness; 'stlopt optimize' scores
+    with the new one by default (--semantics new reproduces its numbers; the verdicts agree).
+
+    Example:
+
+    \b
+        stlopt robustness specs/example.stl examples/s1.csv --semantics new --json
+    """
+    one_blas_thread()
+    from stl_lfd.stl.evaluate import evaluate_file
+
+    with user_errors():
+        result = evaluate_file(spec, signal_csv, semantics.value, nu)
+    if as_json:
+        print(json.dumps(result.to_json()))
+    else:
+        print(f"{result.robustness:.10g}")
+        which = "classic robustness" if semantics is SemanticsOption.classic else f"new robustness, nu = {nu:g}"
+        print(f"{'satisfied' if result.satisfied else 'violated'} ({which})", file=sys.stderr)

@@ -1,0 +1,258 @@
+"""`stlopt optimize`, `ask`, `tell` and `sweep`: optimisation runs, in this process, trial by trial from elsewhere, or a grid of them."""
+
+from __future__ import annotations
+
+import json
+import shlex
+import sys
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from stl_lfd.cli.options import (
+    PLACE_HELP,
+    BackendOption,
+    CommandOption,
+    CommandTimeoutOption,
+    InitOption,
+    IterationsOption,
+    MethodOption,
+    SeedOption,
+    check_command_for,
+    command_of,
+    placements_of,
+)
+from stl_lfd.cli.program import PlainUsage, app, print_table, progress_bar, user_errors
+from stl_lfd.errors import ConfigError
+
+
+@app.command(cls=PlainUsage)
+def optimize(
+    task_file: Optional[Path] = typer.Argument(
+        None, metavar="[TASK_FILE]", help="Task file (YAML), e.g. configs/phi1.yaml (default: the one in configs/ that names --spec)."
+    ),
+    spec: Optional[Path] = typer.Option(None, "--spec", help="Use this STL spec instead of the task's; alone, the task file that names it."),
+    demos: Optional[Path] = typer.Option(
+        None, "--demos", help="Without a task file for --spec: a default task on the skill learned from these demonstrations."
+    ),
+    model: Optional[Path] = typer.Option(None, "--model", help="Without a task file for --spec: a default task on this model file."),
+    iterations: Optional[int] = IterationsOption,
+    init: Optional[int] = InitOption,
+    seed: Optional[int] = SeedOption,
+    out: Optional[Path] = typer.Option(None, "--out", help="Run directory (default: runs/<task name>)."),
+    resume: bool = typer.Option(False, "--resume", help="Continue the run in --out (or runs/<task name>) where it stopped."),
+    backend: Optional[BackendOption] = typer.Option(None, help="Execution backend (default: the task's)."),
+    method: Optional[MethodOption] = typer.Option(
+        None,
+        help="stl (composite BO on the spec's parts), plan (the same, with each part's plan as its prior), pi (the paper), logei, or random search (default: the task's).",
+    ),
+    command: Optional[str] = CommandOption,
+    command_timeout: Optional[float] = CommandTimeoutOption,
+    workers: Optional[int] = typer.Option(None, "--workers", help="Trials run at once, each batch proposed together (default: the task's, or 1)."),
+    place: list[str] = typer.Option([], "--place", help=PLACE_HELP + " Replaces the task's placements."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="On stderr, only what runs and the verdict (no line per trial); errors still show."),
+) -> None:
+    """Optimise a skill so that its execution satisfies the task's STL specification.
+
+    M initial trials, then the task's method until N trials: plan (the default) scores the plan
+    of every candidate (its reference, as the kinematic backend executes it) before spending a
+    trial on it, and models how each part of the spec's execution differs from its plan; stl
+    models each top-level part of the spec with its own GP after M scrambled-Sobol trials and
+    maximises expected improvement of their composition in a trust region; pi is the paper's
+    Algorithm 1 (probability of improvement on one GP of the robustness). Each trial is recorded in the run directory as it finishes; the final
+    summary.json is printed on stdout.
+
+    Without a task file, --spec SPEC runs the task file in configs/ (beside the spec's folder)
+    that names SPEC; where none does, --demos DIR or --model FILE builds a default task (free
+    space, PyBullet, the means of every state but the first, every duration and the transition
+    band; method plan, 32 trials).
+
+    Examples:
+
+    \b
+        stlopt optimize configs/phi1.yaml --seed 3 --out runs/phi1-seed3
+        stlopt optimize configs/phi1.yaml --out runs/phi1-seed3 --resume -N 48
+        stlopt optimize --spec specs/phi2.stl
+        stlopt optimize --spec my.stl --demos demos/three_regions
+    """
+    from stl_lfd.optim import Overrides, finish_run, resume_run, start_run
+    from stl_lfd.optim.default_task import task_to_run
+    from stl_lfd.optim.runs.resume import inputs_record
+    from stl_lfd.progress import TrialPrinter
+
+    with user_errors():
+        file_task = task_to_run(task_file, spec, demos, model, say=lambda message: print(message, file=sys.stderr))
+        given = Overrides(
+            spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None,
+            workers=workers, command=command_of(command, command_timeout, file_task.command), placements=placements_of(file_task.scene, place),
+        )  # fmt: skip
+        run_dir = out or Path("runs") / file_task.name
+        if resume:
+            prepared = resume_run(run_dir, iterations, file_task, given)
+        else:
+            task = given.applied_to(file_task)
+            check_command_for(task.backend, given.command)
+            say = (lambda message: None) if quiet else (lambda message: print(message, file=sys.stderr))
+            prepared = start_run(task, run_dir, say, inputs_record(file_task, given, task))
+    skill = "".join(f" {option} {path}" for option, path in (("--demos", demos), ("--model", model)) if path is not None)
+    again = f"stlopt optimize {task_file or f'--spec {spec}{skill}'} --out {run_dir} --resume"
+    with prepared, user_errors(on_interrupt=f"interrupted; the finished trials are kept. Continue with: {again}"):
+        printer = TrialPrinter(prepared, quiet=quiet)
+        try:
+            summary = finish_run(prepared, printer.trial)
+        finally:
+            printer.stop()
+        printer.done(summary)
+    print(json.dumps(summary.to_json(), indent=2))
+
+
+@app.command(cls=PlainUsage)
+def ask(
+    target: Path = typer.Argument(..., metavar="TASK_FILE_OR_RUN", help="A task file (starts a run) or a run directory."),
+    out: Optional[Path] = typer.Option(None, "--out", help="With a task file: the run directory (default: runs/<task name>)."),
+    spec: Optional[Path] = typer.Option(None, "--spec", help="Use this STL spec instead of the task's (a new run only)."),
+    iterations: Optional[int] = IterationsOption,
+    init: Optional[int] = InitOption,
+    seed: Optional[int] = SeedOption,
+    method: Optional[MethodOption] = typer.Option(None, help="Optimiser method (default: the task's)."),
+) -> None:
+    """Hand out the next trial to execute elsewhere: write its reference CSV, print its path.
+
+    The first ask of a task file creates the run with trial 0, the unoptimised skill. Execute
+    the reference (the executor's contract is on the documentation's page on execution and
+    real robots), then record the signals with 'stlopt tell'. Asking again before telling
+    prints the same trial. When the run has all its trials,
+    nothing is printed on stdout. The same seed gives the same trials as 'stlopt optimize'.
+    References outside the scene's safety limits are recorded as failed trials, never handed out.
+
+    Examples (then execute the printed reference and 'stlopt tell' its signals):
+
+    \b
+        stlopt ask configs/phi1.yaml --out runs/robot
+        stlopt ask runs/robot
+    """
+    from stl_lfd.optim import Overrides, load_task
+    from stl_lfd.optim.runs.asktell import ask as ask_trial
+    from stl_lfd.optim.runs.asktell import ask_new
+    from stl_lfd.optim.runs.resume import inputs_record
+
+    given = Overrides(spec=spec, seed=seed, initial=init, trials=iterations, method=method.value if method else None)
+
+    def refused(trial) -> None:
+        print(f"trial {trial.trial} refused: {trial.error}", file=sys.stderr)
+
+    with user_errors():
+        if target.is_dir():
+            if out is not None or set(given.given()) - {"trials"}:
+                raise ConfigError(f"{target}: a run directory keeps its own settings; only --iterations may be given with it")
+            run_dir, asked = target, ask_trial(target, iterations, on_refused=refused)
+        else:
+            file_task = load_task(target)
+            run_dir = out or Path("runs") / file_task.name
+            if run_dir.is_dir() and any(run_dir.iterdir()):
+                asked = ask_trial(run_dir, iterations, file_task, given, on_refused=refused)
+            else:
+                task = given.applied_to(file_task)
+                asked = ask_new(task, run_dir, inputs_record(file_task, given, task), lambda message: print(message, file=sys.stderr))
+    if asked is None:
+        print(f"{run_dir}: the run has all its trials (raise --iterations to extend it; stlopt report {run_dir})", file=sys.stderr)
+        return
+    print(asked.reference)
+    what = "the unoptimised skill" if asked.trial == 0 else "an initial trial, chosen on its plan" if asked.phase == "design" else f"chosen by {asked.phase}"
+    state = "still pending" if asked.again else "to execute"
+    print(f"trial {asked.trial} ({what}) {state}; then: stlopt tell {shlex.quote(str(run_dir))} SIGNALS.csv", file=sys.stderr)
+
+
+@app.command(cls=PlainUsage)
+def tell(
+    context: typer.Context,
+    run_dir: Path = typer.Argument(..., metavar="RUN_DIR", help="The run directory that 'stlopt ask' handed the trial out of."),
+    signals: Optional[Path] = typer.Argument(None, metavar="SIGNALS_CSV", help="The signals recorded while executing the pending trial."),
+    failed: Optional[str] = typer.Option(None, "--failed", help="Record the pending trial as failed, with this reason, instead of signals."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object (trial, robustness, satisfied, best) instead of the number."),
+) -> None:
+    """Record the signals of the trial 'stlopt ask' handed out, and print its robustness.
+
+    Examples:
+
+    \b
+        stlopt tell runs/robot signals.csv
+        stlopt tell runs/robot --failed "protective stop at t=4 s"
+    """
+    from stl_lfd.optim.runs.asktell import tell as tell_trial
+
+    if (signals is None) == (failed is None):  # mistakes in the command line itself: usage, exit 2
+        context.fail("give the signals CSV of the pending trial, or --failed REASON (not both)")
+    if failed is not None and not failed.strip():
+        context.fail("--failed needs a reason, such as --failed 'protective stop at t = 4 s'")
+    with user_errors():
+        told = tell_trial(run_dir, signals, failed)
+    summary = told.summary
+    number = told.trial.trial if told.trial is not None else 0
+    if as_json:
+        record = {"trial": number, "robustness": told.robustness, "satisfied": told.robustness is not None and told.robustness > 0}
+        record.update(best_trial=summary.best_trial, best_robustness=summary.best_robustness, trials=summary.trials, budget=summary.budget)
+        print(json.dumps(record))
+    elif told.robustness is not None:
+        print(f"{told.robustness:.10g}")
+    if told.trial is not None and told.trial.error:
+        print(f"trial {number} failed: {told.trial.error}", file=sys.stderr)
+    else:
+        print(f"trial {number}: robustness {told.robustness:+.5f} ({'satisfied' if told.robustness > 0 else 'violated'})", file=sys.stderr)
+    left = max(summary.budget - summary.trials, 0)
+    best = f"best so far: trial {summary.best_trial} ({summary.best_robustness:+.5f})" if summary.best_trial is not None else "no successful trial yet"
+    print(f"{best}; {left} trial{'' if left == 1 else 's'} left" + (f": stlopt ask {shlex.quote(str(run_dir))}" if left > 0 else ""), file=sys.stderr)
+
+
+@app.command(cls=PlainUsage)
+def sweep(
+    sweep_file: Path = typer.Argument(..., metavar="SWEEP_FILE", help="Sweep file (YAML): tasks, methods, seeds, variants."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Sweep folder (default: runs/<sweep name>)."),
+    jobs: int = typer.Option(1, "--jobs", "-j", min=1, help="Cells run at once by local worker processes."),
+    ray: Optional[str] = typer.Option(None, "--ray", help="Run the cells as Ray tasks: 'auto' (this machine's cluster) or a cluster address."),
+) -> None:
+    """Run a grid of optimisations and print the table of their results.
+
+    Every cell (task x variant x method x seed) is an ordinary run directory in SWEEP/runs/;
+    sweep.csv has one row per cell and sweep.png compares the methods. Cells already finished
+    in the folder are skipped, so a killed sweep continues where it stopped. The table
+    (success rate, median trials to the first satisfaction, median best robustness, wall time
+    per run) goes to stdout.
+
+    Examples:
+
+    \b
+        stlopt sweep sweeps/phi1_methods.yaml --jobs 2
+        stlopt sweep sweeps/phi1_methods.yaml --ray auto
+    """
+    from stl_lfd.files import check_output_folder
+    from stl_lfd.optim.runs.sweep import local_results, ray_results, run_sweep
+    from stl_lfd.optim.runs.sweep_file import load_sweep
+    from stl_lfd.report.sweep import TABLE_HEADER, sweep_groups, table_rows, write_sweep_figure
+
+    with user_errors():
+        plan = load_sweep(sweep_file)
+        folder = check_output_folder(out or Path("runs") / plan.name, "sweep folder")
+        results = (lambda cells: ray_results(cells, ray)) if ray is not None else (lambda cells: local_results(cells, jobs))
+        again = f"stlopt sweep {sweep_file}" + (f" --out {out}" if out else "")
+        with (
+            progress_bar(f"sweep {plan.name}", len(plan.cells)) as advance,
+            user_errors(on_interrupt=f"interrupted; finished cells are kept. Continue with: {again}"),
+        ):
+
+            def finished(result, done: int, total: int) -> None:
+                advance(done)
+                if result is not None:
+                    record = result.record
+                    verdict = f"satisfied at trial {record['first_satisfied_trial']}" if record["satisfied"] else "not satisfied"
+                    best = f"{record['best_robustness']:+.5f}" if record["best_robustness"] is not None else "-"
+                    print(f"{result.name}: {verdict}, best {best} ({record['wall_seconds']:.0f} s)", file=sys.stderr)
+                elif done:
+                    print(f"{done} of {total} cells already done in {folder}", file=sys.stderr)
+
+            run_sweep(plan, folder, results, finished)
+        figure = write_sweep_figure(folder)
+        groups = sweep_groups(folder)
+    print_table(TABLE_HEADER, table_rows(groups))
+    print(f"wrote {folder / 'sweep.csv'} and {figure}", file=sys.stderr)
