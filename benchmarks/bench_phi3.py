@@ -20,7 +20,7 @@ from rich.table import Table
 
 from stl_lfd.optim import RunDirectory, finish_run, load_task, start_run
 from stl_lfd.optim.runs.sweep import local_map
-from stl_lfd.report.figures import followed_states
+from stl_lfd.report.figures.skills import followed_states
 from stl_lfd.signals import read_signal_csv
 from stl_lfd.stl import load_spec
 from stl_lfd.stl.regions import region_boxes

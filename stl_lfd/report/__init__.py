@@ -1,5 +1,6 @@
-"""Reports. `write_report` saves a run's figures (`figures`: a loaded run in, matplotlib Figures
-out) and an index.html that explains them (`html`, with its words from `explain`)."""
+"""Reports. `write_report` saves a run's figures (`figures`: one `FigureSpec` per figure, in a
+registry: a loaded run in, a matplotlib Figure and its caption out) and an index.html that
+explains them (`html`, with the run's words from `explain`)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
 
     matplotlib.use("Agg")
     from stl_lfd.report import figures
+    from stl_lfd.report.figures import ReportOptions
     from stl_lfd.report.html import write_index
     from stl_lfd.report.run_data import load_run
 
@@ -30,22 +32,8 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
         if unknown:
             raise ConfigError(f"--gp-parameter {unknown[0]} is not a parameter of the run ({', '.join(run.space.names)})")
     out.mkdir(parents=True, exist_ok=True)
-    made = [
-        ("trajectories", figures.trajectories(run)),
-        ("region_distances", figures.region_distances(run)),
-        ("robustness", figures.robustness_per_trial(run)),
-        ("components", figures.component_robustness(run)),
-        ("gp_slices", figures.gp_slices(run, gp_parameters)),
-        ("transitions", figures.transition_graphs(run)),
-        ("durations", figures.durations_per_trial(run)),
-        ("forces", figures.contact_forces(run)),
-        ("wrench", figures.wrench(run)),
-        ("objects", figures.object_signals(run)),
-        ("tilt", figures.tilt(run)),
-        ("tracking", figures.tracking(run)),
-    ]
-    if compare:
-        made.append(("compare", figures.compare_runs([run] + others)))
+    options = ReportOptions(tuple(others), tuple(gp_parameters) if gp_parameters else None)
+    made = [(figure.name, figure.draw(run, options) if figure.applies(run, options) else None) for figure in figures.FIGURES]
     written = []
     for name, figure in made:
         if figure is None:

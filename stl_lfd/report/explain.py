@@ -1,6 +1,7 @@
-"""What a report says in words: the task, the result, the commands that go on from here, and
-each figure's caption. Everything is derived from the run's own data, so that every statement
-is true for the run it describes (the semantics, the method's phases, the best trial)."""
+"""What a report says in words: the task, the result and the commands that go on from here
+(each figure's caption is its `FigureSpec`'s). Everything is derived from the run's own data,
+so that every statement is true for the run it describes (the semantics, the method's phases,
+the best trial)."""
 
 from __future__ import annotations
 
@@ -9,20 +10,6 @@ from pathlib import Path
 
 from stl_lfd.optim.settings import SINGLE_SKILL, Optimizer, Parameters
 from stl_lfd.report.run_data import RunData
-
-# Figures that are drawn only when the run has what they show: name -> why one is left out.
-LEFT_OUT = {
-    "components": "the run recorded no robustness per part of the spec (its trials predate it, or every trial failed)",
-    "region_distances": "the spec names no fixed region (a box of constant x, y, z bounds) under F, G or G !",
-    "durations": "no duration mean was optimised",
-    "transitions": "the transitions were not optimised, so the graph is the same before and after (stlopt learn --plot draws the skill's)",
-    "gp_slices": "fewer than three trials finished",
-    "forces": "no trial touched anything (the contact force was zero throughout)",
-    "tilt": "no trial turned the hand by more than a degree",
-    "wrench": "the run recorded no wrist force-torque components, or nothing was touched",
-    "objects": "the spec compares no recorded signal of the scene's objects (shaft_tilt, shaft_depth, ...) with a number",
-    "tracking": "the run learned no tracking model (its backend plays the plan back, it has several object placements, or its method is not plan)",
-}
 
 
 def semantics_in_words(run: RunData) -> str:
@@ -166,123 +153,3 @@ def _shown_path(path: Path, relative: bool = True) -> str:
         return str(resolved.relative_to(Path.cwd().resolve())) if relative else str(resolved)
     except ValueError:
         return str(resolved)
-
-
-def caption(name: str, run: RunData) -> str:
-    """The caption of figure `name` of this run."""
-    best = f"the best (trial {run.best.trial}) in red" if run.best is not None else "no best trial yet"
-    numbered = "darker in trial order, the unoptimised skill dashed, " + best
-    semantics = semantics_in_words(run)
-    optimizer = _optimizer(run)
-    captions = {
-        "trajectories": (
-            f"End-effector paths of every trial seen from above (x-y) and from the side (x-z, y-z): {numbered}. "
-            "Circles mark where the unoptimised and the best path start, squares where they end."
-            + (" The coloured boxes are the regions the spec uses." if _drawn_regions(run) else "")
-            + (" Black arrows: where the best trial's hand points (its approach axis), projected on each view." if _best_turns_the_hand(run) else "")
-            + (
-                " Grey: the objects the task is about (outlines of their bounding boxes); dotted, the path of the moved object's centre "
-                "in the unoptimised and the best trial, its end as a cross."
-                if _drawn_objects(run)
-                else ""
-            )
-        ),
-        "region_distances": (
-            "Signed distance (m, negative inside) to each region the spec names, over the time window in which it applies: "
-            "F R is met when the curve dips below 0 somewhere in its window, G R when it stays below 0 throughout, "
-            f"G !R when it stays above 0; the unoptimised skill dashed, {best}."
-        ),
-        "robustness": (
-            f"The {semantics} of each trial, the value the optimiser maximises (above 0 satisfies the spec): "
-            f"the first {optimizer.initial} trials ({optimizer.initial_choice}) as squares, "
-            f"then those of method {optimizer.method} as circles; the line is the best so far, the dashed line the unoptimised skill."
-        ),
-        "components": _components_caption(run),
-        "gp_slices": (
-            "A Gaussian process refitted on the trials, along one or two parameters through the best point (the others held at the best's values): "
-            "its mean, its 95 % band and the trials, projected. It shows what the trials say about these parameters "
-            "(methods plan and stl model each part of the spec apart instead)."
-        ),
-        "transitions": (
-            "The states (numbered, their duration means below them) and transitions before and after optimisation, for each skill whose "
-            "transitions are optimised: edge width by the probability of leaving a state for another (each row normalised), the states "
-            "the retrieval follows filled pink and the transitions it takes in red."
-        ),
-        "durations": (
-            "Duration means of the states each trial's retrieval follows, stacked in the order it follows them (states it skips are left "
-            "out): the skill's timeline trial by trial, the best trial's label in red"
-            + ("; the dashed line is where the rollout ends." if len(run.models) == 1 else ".")
-        ),
-        "forces": f"Contact force over time per trial: {numbered}." + (" Dashed green: the spec's thresholds on it." if run.thresholds.get("force") else ""),
-        "wrench": (
-            "The wrist force-torque sensor's components of the unoptimised skill (dashed) and the best trial (solid), in the robot's base "
-            "frame with the hand's and its load's weight removed, as a Franka's external-wrench estimate gives them: force (N) above, "
-            "torque about the grasp point (Nm) below."
-        ),
-        "objects": (
-            f"The signals of the scene's objects that the spec constrains, over time per trial: {numbered}; dashed green, the spec's "
-            "thresholds (the shaft's depth below the hole's rim and its offset from the hole's axis in m, its tilt from upright in rad, "
-            "its speed in m/s, held 1 while both fingers touch it)."
-        ),
-        "tracking": (
-            "How the robot followed its references. Left: the best trial's executed path against its plan (the reference) and against "
-            "the prediction of the tracking model learned from the executions, per axis. Right: for every trial, the RMS "
-            "error of the plan and of that final model as predictions of what was executed (the model was fitted on the trials "
-            f"{_trial_list(run)}, so most of these are in-sample; tracking.json holds its held-out error). "
-            + (
-                "Method plan scored its candidates by this prediction."
-                if run.tracking is not None and run.tracking.used
-                else "The robot followed its plans within 1 mm, so method plan scored the plans themselves."
-            )
-        ),
-        "compare": "The best robustness so far, trial by trial, of this run and of each run given with --compare (each in its own semantics, named in the legend).",
-        "tilt": f"The hand's tilt (the angle between its approach axis and straight down) over time per trial: {numbered}.",
-    }
-    return captions.get(name, name)
-
-
-def _trial_list(run: RunData) -> str:
-    numbers = run.tracking.trials if run.tracking is not None else []
-    return ", ".join("init" if number == 0 else str(number) for number in numbers)
-
-
-def _drawn_regions(run: RunData) -> bool:
-    """Whether the trajectories figure draws a region: one that bounds two of x, y, z."""
-    return any(len(set(box) & {"x", "y", "z"}) >= 2 for box in run.regions.values())
-
-
-def _drawn_objects(run: RunData) -> bool:
-    from stl_lfd.report import objects
-
-    return bool(objects.fixed_frame_objects(run) or objects.moving_frames(run))
-
-
-def _best_turns_the_hand(run: RunData) -> bool:
-    from stl_lfd.report.figures import turns_the_hand
-
-    table = run.signals.get(run.best.trial) if run.best is not None else None
-    return table is not None and turns_the_hand(table)
-
-
-def _components_caption(run: RunData) -> str:
-    task = run.task
-    if task.semantics == "classic":
-        rule = "their minimum, so the lowest part (circled) is the spec's value"
-    else:
-        rule = (
-            f"the new robustness's conjunction (nu = {task.nu:g}): while some part is below 0 the spec's value is negative and at or "
-            "above the lowest part (circled); once every part is above 0 it is a mean of the parts weighted towards the lowest, "
-            "so it lies between the lowest part and their mean"
-        )
-    text = (
-        f"The spec's robustness per trial (black, on top) and each of its top-level parts below it, each on its own scale; circles mark "
-        f"the lowest part. The spec's value is {rule}."
-    )
-    if task.placements:
-        text += " With several object placements the parts are composed at each placement, and the worst placement counts."
-    return text
-
-
-def left_out(run: RunData, drawn: set[str]) -> list[tuple[str, str]]:
-    """`(figure, why)` for each figure this run does not show."""
-    return [(f"{name}.png", why) for name, why in LEFT_OUT.items() if name not in drawn]

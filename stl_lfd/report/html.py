@@ -8,6 +8,7 @@ from pathlib import Path
 
 from stl_lfd.files import write_atomically
 from stl_lfd.report import explain
+from stl_lfd.report import figures as registry
 from stl_lfd.report.run_data import RunData
 
 STYLE = """body{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;line-height:1.4}
@@ -28,10 +29,11 @@ def index_page(run: RunData, figures: list[tuple[str, Path]]) -> str:
     commands = "\n".join(f"<tr><td><code>{escape(command)}</code></td><td>{escape(what)}</td></tr>" for command, what in explain.commands(run))
     images = "\n".join(
         f'<figure id="{escape(name)}"><img src="{escape(path.name)}" alt="{escape(name)}">'
-        f"<figcaption><b>{escape(path.name)}</b>: {escape(explain.caption(name, run))}</figcaption></figure>"
+        f"<figcaption><b>{escape(path.name)}</b>: {escape(registry.figure_named(name).caption(run))}</figcaption></figure>"
         for name, path in figures
     )
-    left_out = explain.left_out(run, {name for name, _ in figures})
+    drawn = {name for name, _ in figures}
+    left_out = [(f"{figure.name}.png", figure.left_out) for figure in registry.FIGURES if figure.left_out and figure.name not in drawn]
     left_out_items = "\n".join(f"<li><b>{escape(name)}</b>: {escape(why)}</li>" for name, why in left_out)
     left_out_section = f"<p>Not drawn for this run:</p><ul>\n{left_out_items}\n</ul>" if left_out else ""
     if run.missing_signals:

@@ -11,7 +11,8 @@ from typer.testing import CliRunner
 
 from stl_lfd.cli import app
 from stl_lfd.optim import finish_run, load_task, start_run
-from stl_lfd.report import explain
+from stl_lfd.report import figures
+from stl_lfd.report.figures import FigureSpec, figure_named
 from stl_lfd.report.run_data import load_run
 from stl_lfd.signals import read_signal_csv, write_signal_csv
 from tests.conftest import ROOT
@@ -136,7 +137,7 @@ def test_captions_follow_the_semantics_and_unused_figures_say_why(tmp_path, lear
     run = load_run(tmp_path / "run")
     assert all(trial.robustness == min(trial.components.values()) for trial in run.trials)  # what the caption says
     under_new = dataclasses.replace(run, task=dataclasses.replace(run.task, semantics="new"))
-    assert "the new robustness's conjunction (nu = 1)" in explain.caption("components", under_new)
+    assert "the new robustness's conjunction (nu = 1)" in figure_named("components").caption(under_new)
 
 
 @pytest.mark.slow
@@ -201,3 +202,37 @@ def test_a_missing_signal_file_is_named_not_silently_dropped(run_dir, tmp_path):
     assert result.exit_code == 0, result.stderr
     assert "warning: " in result.stderr and "the recorded signals signals/trial-0002.csv are missing; the figures leave their trials out" in result.stderr
     assert "Missing from the run directory, so left out of every figure: signals/trial-0002.csv." in page_text(tmp_path / "report" / "index.html")
+
+
+class SpeedPerTrial(FigureSpec):
+    """A figure a contributor might add: the hand's top speed per trial."""
+
+    name = "top_speed"
+    left_out = "no trial recorded positions"
+
+    def applies(self, run, options):
+        return bool(run.signals)
+
+    def draw(self, run, options):
+        from matplotlib.figure import Figure
+
+        figure = Figure(figsize=(6, 3))
+        axes = figure.subplots()
+        numbers = sorted(run.signals)
+        speeds = [np.max(np.linalg.norm(np.diff(np.column_stack([run.signals[n].columns[a] for a in "xyz"]), axis=0), axis=1)) for n in numbers]
+        axes.bar([str(number) for number in numbers], speeds)
+        return figure
+
+    def caption(self, run):
+        return f"The hand's top speed in each of the {len(run.signals)} recorded trials."
+
+
+@pytest.mark.slow
+def test_a_new_figure_is_one_spec_class_and_one_registry_line(run_dir, tmp_path, monkeypatch):
+    monkeypatch.setattr(figures, "FIGURES", (*figures.FIGURES, SpeedPerTrial()))  # the registry line
+    out = tmp_path / "report"
+    result = runner.invoke(app, ["report", str(run_dir), "--out", str(out)])
+    assert result.exit_code == 0, result.stderr
+    assert str(out / "top_speed.png") in result.stdout.split()
+    assert_picture(out / "top_speed.png")
+    assert "top_speed.png: The hand's top speed in each of the 7 recorded trials." in page_text(out / "index.html")
