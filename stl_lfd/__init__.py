@@ -37,7 +37,7 @@ _HOMES = {
     "retrieve": "stl_lfd.hsmm",
     "load_scene": "stl_lfd.sim.scene_file",
     "execute": "stl_lfd.sim",
-    "Command": "stl_lfd.sim.command",
+    "Command": "stl_lfd.sim.executor",
     "read_reference_csv": "stl_lfd.sim.reference",
     "rollout_model": "stl_lfd.skill",
     "optimize": "stl_lfd.optim.api",

@@ -45,7 +45,7 @@ SeedOption = typer.Option(None, "--seed", help="Seed of the initial trials and o
 def command_of(text: Optional[str], timeout: Optional[float], task_command):
     """The executor command of --command/--command-timeout, None when neither is given."""
     from stl_lfd.sim import Command
-    from stl_lfd.sim.command import DEFAULT_TIMEOUT
+    from stl_lfd.sim.executor import DEFAULT_TIMEOUT
 
     if text is not None:
         return Command.parse(text, timeout if timeout is not None else DEFAULT_TIMEOUT, cwd=Path.cwd())

@@ -11,6 +11,7 @@ from typing import Any, Iterator
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_SEED, MAX_TRIALS, MAX_WORKERS
+from stl_lfd.optim.method_registry import method_class, method_names
 from stl_lfd.rotations import ROTATION_COLUMNS
 from stl_lfd.yamlfile import check_keys, integer, number, shown
 
@@ -109,7 +110,6 @@ class Optimizer:
 
     def __post_init__(self) -> None:
         """Refuse settings that make no sense, from a task file, the command line or Python."""
-        from stl_lfd.optim.methods import method_class, method_names
 
         if self.method not in method_names():
             raise ConfigError(f"'optimizer.method' must be one of {', '.join(method_names())} (got {shown(self.method)})")
@@ -179,8 +179,6 @@ def parameters_from_yaml(data: Any, path: Path, where: str) -> Parameters:
 
 def optimizer_from_yaml(data: Any, path: Path) -> Optimizer:
     check_keys(data, ("method", "initial", "trials", "seed", "xi", "workers"), path, "optimizer")
-    from stl_lfd.optim.methods import method_names
-
     defaults = Optimizer()
     settings = dict(
         method=choice(data.get("method", defaults.method), method_names(), path, "optimizer.method"),

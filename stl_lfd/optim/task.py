@@ -16,7 +16,7 @@ from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_PLACEMENTS, MAX_STATES, samples_problem
 from stl_lfd.optim.settings import SINGLE_SKILL, Optimizer, Parameters, choice, located, optimizer_from_yaml, parameters_from_yaml
 from stl_lfd.poses import Pose
-from stl_lfd.sim.command import DEFAULT_TIMEOUT, Command
+from stl_lfd.sim.executor import DEFAULT_TIMEOUT, Command
 from stl_lfd.sim.registry import DEFAULT_BACKEND, backend_class, backend_names
 from stl_lfd.sim.scene_file import scene_reference
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown

@@ -43,7 +43,7 @@ _HOMES = {
     "get_backend": "stl_lfd.sim.registry",
     "new_backend": "stl_lfd.sim.registry",
     "register": "stl_lfd.sim.registry",
-    "Command": "stl_lfd.sim.command",
+    "Command": "stl_lfd.sim.executor",
     "CommandBackend": "stl_lfd.sim.command",
     "exchange_folder": "stl_lfd.sim.command",
     "SIMULATION_RATE": "stl_lfd.sim.reference",

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, ClassVar, Protocol
 
 if TYPE_CHECKING:
-    from stl_lfd.sim.command import Command
+    from stl_lfd.sim.executor import Command
     from stl_lfd.sim.reference import Reference, Rollout
     from stl_lfd.sim.scene import Scene
 

@@ -244,7 +244,8 @@ def test_ctrl_c_stops_the_executor_with_its_children_and_keeps_the_trials(tmp_pa
 
 
 def test_what_a_command_leaves_running_is_stopped_after_every_execution(tmp_path):
-    from stl_lfd.sim.command import Command, run_command
+    from stl_lfd.sim.command import run_command
+    from stl_lfd.sim.executor import Command
     from tests.processes import alive
 
     script = "sleep 300 & echo $! > left.pid"
@@ -254,7 +255,7 @@ def test_what_a_command_leaves_running_is_stopped_after_every_execution(tmp_path
 
 def test_a_misspelt_placeholder_is_named_and_other_braces_are_the_commands():
     from stl_lfd.errors import ConfigError
-    from stl_lfd.sim.command import Command
+    from stl_lfd.sim.executor import Command
 
     with pytest.raises(ConfigError, match=r"the command has \{signal\}: did you mean \{signals\}\?"):
         Command.parse("executor {reference} {signal}")

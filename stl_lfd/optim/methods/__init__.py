@@ -11,42 +11,12 @@
 | `logei`  | `analytic.LogExpectedImprovementSearch`  | log expected improvement                       |
 | `random` | `random.RandomSearch`                    | uniform random points (the baseline)           |
 
-A new method is a `SearchMethod` subclass and one line in `REGISTRY` (or `register(name, cls)`
-from outside the package). Classes are imported on first use: naming the methods, as the
-command line does for its choices, loads no torch.
+A new method is a `SearchMethod` subclass and one line in `REGISTRY` (`optim/method_registry.py`,
+or `register(name, cls)` from outside the package). Classes are imported on first use: naming
+the methods, as the command line and the settings' checks do, loads no torch (nor this
+package, which the settings would otherwise import back).
 """
 
-from __future__ import annotations
+from stl_lfd.optim.method_registry import REGISTRY, method_class, method_names, register
 
-from importlib import import_module
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from stl_lfd.optim.methods.base import SearchMethod
-
-REGISTRY: dict[str, "str | type[SearchMethod]"] = {
-    "stl": "stl_lfd.optim.methods.stl:CompositeSearch",
-    "plan": "stl_lfd.optim.methods.plan:PlanSearch",
-    "pi": "stl_lfd.optim.methods.analytic:ProbabilityOfImprovement",
-    "logei": "stl_lfd.optim.methods.analytic:LogExpectedImprovementSearch",
-    "random": "stl_lfd.optim.methods.random:RandomSearch",
-}
-
-
-def method_names() -> tuple[str, ...]:
-    """The registered methods' names, in the registry's order."""
-    return tuple(REGISTRY)
-
-
-def register(name: str, method: "type[SearchMethod]") -> None:
-    """Make `method` available by `name` (task files, `--method`, `Optimizer(method=...)`)."""
-    REGISTRY[name] = method
-
-
-def method_class(name: str) -> "type[SearchMethod]":
-    """The class registered as `name`."""
-    entry = REGISTRY[name]
-    if isinstance(entry, str):
-        module, _, attribute = entry.partition(":")
-        entry = REGISTRY[name] = getattr(import_module(module), attribute)
-    return entry
+__all__ = ["REGISTRY", "method_class", "method_names", "register"]
