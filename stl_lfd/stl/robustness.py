@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike
 from stl_lfd.choices import SEMANTICS
 from stl_lfd.errors import SignalError, SpecError, StlNameError
 from stl_lfd.stl import ast
-from stl_lfd.stl._numerics import (
+from stl_lfd.stl.kernels import (
     classic_conjunction,
     new_conjunction,
     new_conjunction_of,

@@ -7,8 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from stl_lfd.stl import compile_spec, format_formula, parse
-from tests.stl import reference
+from stl_lfd.stl import compile_spec, format_formula, parse, reference
 from tests.stl.strategies import formulas, traces
 
 pytestmark = pytest.mark.filterwarnings("ignore::stl_lfd.stl.robustness.HorizonWarning")

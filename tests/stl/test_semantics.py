@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from stl_lfd.errors import SignalError, SpecError, StlNameError
-from stl_lfd.stl import HorizonWarning, _numerics, compile_spec, parse
-from stl_lfd.stl._numerics import new_conjunction
+from stl_lfd.stl import HorizonWarning, compile_spec, kernels, parse
+from stl_lfd.stl.kernels import new_conjunction
 
 TIMES5 = np.arange(5.0)
 
@@ -205,8 +205,8 @@ def test_new_conjunction_of_operands_equals_the_stacked_one(nu):
         if rng.random() < 0.3:
             values = np.round(values)
         with np.errstate(all="ignore"):
-            expected = _numerics.new_conjunction(np.stack(list(values), axis=-1), nu)
-        actual = _numerics.new_conjunction_of(list(values), nu)
+            expected = kernels.new_conjunction(np.stack(list(values), axis=-1), nu)
+        actual = kernels.new_conjunction_of(list(values), nu)
         assert np.array_equal(np.isnan(actual), np.isnan(expected))
         finite = np.isfinite(expected)
         assert np.array_equal(actual[~finite], expected[~finite], equal_nan=True)

@@ -22,7 +22,7 @@ from stl_lfd.cli import app
 from stl_lfd.errors import SpecError, StlSyntaxError
 from stl_lfd.signals import read_signal_csv
 from stl_lfd.stl import ast, compile_spec, format_formula, format_spec, parse, resolve, split_spec
-from stl_lfd.stl._numerics import new_conjunction
+from stl_lfd.stl.kernels import new_conjunction
 from stl_lfd.stl.parser import MAX_DEPTH, nesting_depth
 from tests.conftest import ROOT
 from tests.stl.strategies import formulas, traces

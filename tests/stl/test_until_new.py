@@ -1,4 +1,4 @@
-"""Until under the new robustness: the owner-sharing kernel of `_numerics.until_windows` against
+"""Until under the new robustness: the owner-sharing kernel of `kernels.until_windows` against
 the straightforward one it replaced (a `width x width` operand matrix per output), kept here as
 `reference_until`."""
 
@@ -9,9 +9,10 @@ import pytest
 from numpy.lib.stride_tricks import sliding_window_view
 
 from stl_lfd.signals import read_signal_csv
-from stl_lfd.stl import _numerics, compile_spec, parse
+from stl_lfd.stl import compile_spec, parse
 from stl_lfd.stl import robustness as robustness_module
-from stl_lfd.stl._numerics import _pad, classic_conjunction, new_conjunction, new_disjunction, until_windows
+from stl_lfd.stl.kernels import budgets, classic_conjunction, interpolation, new_conjunction, new_disjunction, sums, until_windows
+from stl_lfd.stl.kernels.memory import _pad
 from tests.conftest import ROOT
 
 pytestmark = [pytest.mark.filterwarnings("ignore::stl_lfd.stl.robustness.HorizonWarning"), pytest.mark.filterwarnings("error::RuntimeWarning")]
@@ -38,7 +39,7 @@ def reference_until(left: np.ndarray, right: np.ndarray, lo: int, width: int, co
     left_windows = sliding_window_view(_pad(left, length, np.inf), width, axis=-1)
     right_windows = sliding_window_view(_pad(right, length, -np.inf), width, axis=-1)
     batch = int(np.prod(left.shape[:-1], dtype=int))
-    step = max(1, _numerics._CHUNK_ELEMENTS // max(1, batch * width * width))
+    step = max(1, budgets.CHUNK_ELEMENTS // max(1, batch * width * width))
     parts = []
     for begin in range(0, count, step):
         chunk = slice(begin, min(begin + step, count))
@@ -151,8 +152,8 @@ def test_chunked_outputs_match(monkeypatch):
     rng = np.random.default_rng(3)
     left, right = rng.normal(size=(2, 2, 40))
     expected = until_windows(left, right, 2, 30, 40, new_conjunction, 1.0)
-    monkeypatch.setattr(_numerics, "_CHUNK_ELEMENTS", 50)
-    monkeypatch.setattr(_numerics, "_BLOCK_ELEMENTS", 7)
+    monkeypatch.setattr(budgets, "CHUNK_ELEMENTS", 50)
+    monkeypatch.setattr(budgets, "BLOCK_ELEMENTS", 7)
     assert difference(until_windows(left, right, 2, 30, 40, new_conjunction, 1.0), expected) <= 1e-12
 
 
@@ -259,16 +260,16 @@ def owned_sums_case(rng: np.random.Generator, nu: float) -> tuple[np.ndarray, np
 def test_interpolated_sums_match_term_by_term(seed, monkeypatch):
     """Wherever the bound lets an owner take the interpolation (made free, so that it is taken
     wherever exact), its sums equal the direct ones next to its own term 1."""
-    monkeypatch.setattr(_numerics, "_INTERPOLATION_COST", 0)
+    monkeypatch.setattr(budgets, "INTERPOLATION_COST", 0)
     rng = np.random.default_rng(seed)
     taken = 0
     for _ in range(40):
         nu = float(rng.choice((0.01, 0.1) + NUS + (30.0,)))
         left, rows, start, ends, scales = owned_sums_case(rng, nu)
         with np.errstate(all="ignore"):
-            actual = _numerics._tail_sums(left, rows, start, ends, scales, nu)
-            expected = _numerics._direct_tail_sums(left, rows, start, ends, scales, nu)
-            taken += int(_numerics._interpolated_tail_sums(left, rows, start, ends, scales, nu)[1].sum())
+            actual = sums._tail_sums(left, rows, start, ends, scales, nu)
+            expected = sums._direct_tail_sums(left, rows, start, ends, scales, nu)
+            taken += int(interpolation._interpolated_tail_sums(left, rows, start, ends, scales, nu)[1].sum())
         # next to the owner's own terms: weight 1, numerator 1 (negative m) or m (positive m)
         own = np.stack([np.ones(scales.size), np.where(scales < 0, 1.0, scales)])
         assert np.max(np.abs(actual - expected) / (own + np.abs(expected))) <= 1e-12
@@ -294,11 +295,11 @@ def test_owners_far_below_their_samples_at_small_nu():
 def test_an_owner_of_only_infinite_samples_in_a_constant_row(monkeypatch):
     """The row's one finite value far below an owner whose own samples are all +inf: no
     interpolation point may overflow (its sums are 0)."""
-    monkeypatch.setattr(_numerics, "_INTERPOLATION_COST", 0)
+    monkeypatch.setattr(budgets, "INTERPOLATION_COST", 0)
     left = np.array([np.inf] * 150 + [-1000.0] * 150)[None]
     rows, ends, scales = np.array([0, 0]), np.array([150, 300]), np.array([0.01, -1001.0])
-    actual = _numerics._tail_sums(left, rows, 0, ends, scales, 1.0)
-    assert np.allclose(actual, _numerics._direct_tail_sums(left, rows, 0, ends, scales, 1.0), rtol=1e-12, atol=0)
+    actual = sums._tail_sums(left, rows, 0, ends, scales, 1.0)
+    assert np.allclose(actual, sums._direct_tail_sums(left, rows, 0, ends, scales, 1.0), rtol=1e-12, atol=0)
     assert np.array_equal(actual[:, 0], [0.0, 0.0])
 
 
@@ -309,8 +310,8 @@ def test_interpolation_is_taken_only_where_it_pays():
     ends = np.arange(600, 1000)
     scales = np.minimum.accumulate(left[0])[ends - 1] - 0.5
     rows = np.zeros(ends.size, dtype=int)
-    assert _numerics._interpolated_tail_sums(left, rows, 0, ends, scales, 1.0)[1].all()
-    assert not _numerics._interpolated_tail_sums(left, rows[:1], 0, ends[:1], scales[:1], 1.0)[1].any()
+    assert interpolation._interpolated_tail_sums(left, rows, 0, ends, scales, 1.0)[1].all()
+    assert not interpolation._interpolated_tail_sums(left, rows[:1], 0, ends[:1], scales[:1], 1.0)[1].any()
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -319,12 +320,12 @@ def test_long_top_level_untils_match_the_reference(seed, monkeypatch):
     batched: the candidates whose right operand owns them sum long prefixes by interpolation."""
     rng = np.random.default_rng(100 + seed)
     interpolated = []
-    original = _numerics._node_sums
-    monkeypatch.setattr(_numerics, "_node_sums", lambda nodes, counts, scales, nu: interpolated.append(scales.size) or original(nodes, counts, scales, nu))
+    original = interpolation._node_sums
+    monkeypatch.setattr(interpolation, "_node_sums", lambda nodes, counts, scales, nu: interpolated.append(scales.size) or original(nodes, counts, scales, nu))
     for free in (False, True):
         if free:
             assert sum(interpolated) > 300  # taken where it pays
-            monkeypatch.setattr(_numerics, "_INTERPOLATION_COST", 0)
+            monkeypatch.setattr(budgets, "INTERPOLATION_COST", 0)
         for _ in range(3):
             samples = int(rng.integers(400, 700))
             left = np.cumsum(rng.normal(0, 0.01, (3, samples)), axis=-1) + rng.normal(0.2, 0.1)

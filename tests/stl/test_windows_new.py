@@ -1,5 +1,5 @@
 """Bounded `G`/`F` windows under the new robustness: wide windows at many outputs take the
-interpolation of `_numerics._interpolated_windows` where it is exact; each window against its
+interpolation of `kernels.windows._interpolated_windows` where it is exact; each window against its
 new conjunction taken directly."""
 
 from __future__ import annotations
@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from numpy.lib.stride_tricks import sliding_window_view
 
-from stl_lfd.stl import _numerics, compile_spec, parse
-from stl_lfd.stl._numerics import _pad, new_conjunction, window_reduce
+from stl_lfd.stl import compile_spec, parse
+from stl_lfd.stl.kernels import budgets, interpolation, new_conjunction, window_reduce
+from stl_lfd.stl.kernels.memory import _pad
 
 pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")
 
@@ -54,7 +55,7 @@ def difference(actual: np.ndarray, expected: np.ndarray) -> float:
 def test_wide_windows_match_the_direct_conjunction(seed, free, monkeypatch):
     """Windows of 64-400 samples over 100-900, at 2 outputs to all: 50 cases a seed."""
     if free:  # taken wherever the bound allows
-        monkeypatch.setattr(_numerics, "_WINDOW_INTERPOLATION_COST", 0)
+        monkeypatch.setattr(budgets, "WINDOW_INTERPOLATION_COST", 0)
     rng = np.random.default_rng(seed)
     for case in range(50):
         samples = int(rng.integers(100, 900))
@@ -73,17 +74,17 @@ def test_the_interpolation_is_taken_on_a_trajectory():
     rng = np.random.default_rng(5)
     values = np.cumsum(rng.normal(0, 0.002, (1, 2200)), axis=-1) + 0.3
     taken = []
-    original = _numerics._node_sums
+    original = interpolation._node_sums
 
     def counting(nodes, counts, scales, nu):
         taken.append(scales.size)
         return original(nodes, counts, scales, nu)
 
-    _numerics._node_sums = counting
+    interpolation._node_sums = counting
     try:
         actual = window_reduce(values, 500, 2200, new_conjunction, 1.0)
     finally:
-        _numerics._node_sums = original
+        interpolation._node_sums = original
     assert sum(taken) > 1100
     assert difference(actual, direct_windows(values, 500, 2200, 1.0)) <= 1e-12
 
@@ -95,7 +96,7 @@ def test_formulas_with_wide_windows_match(monkeypatch):
     signals = {name: np.cumsum(rng.normal(0, 0.01, size=(2, times.size)), axis=-1) for name in "xy"}
     for text in ("G[0, 2] x > -0.1", "F[0.5, 3] (x > 0 & y < 0.1)", "(G[0, 1] x > -0.2) U y > 0.05"):
         actual = compile_spec(parse(text), "new").trace(signals, times)
-        monkeypatch.setattr(_numerics, "_INTERPOLATED_WIDTH_MIN", 10**9)
+        monkeypatch.setattr(budgets, "INTERPOLATED_WIDTH_MIN", 10**9)
         expected = compile_spec(parse(text), "new").trace(signals, times)
         monkeypatch.undo()
         assert difference(actual, expected) <= 1e-12

@@ -1,5 +1,7 @@
-"""Plain, obviously-correct evaluators used as oracles: one sample at a time, straight from
-the definitions in DESIGN.md, no vectorisation and no demand ranges."""
+"""The readable reference implementation of the robustness semantics: plain, obviously correct
+evaluators, one sample at a time, straight from the definitions in DESIGN.md (docs/stl.md), no
+vectorisation and no demand ranges. Far too slow for use; the compiled robustness and every
+kernel of `stl_lfd.stl.kernels` are tested against it."""
 
 from __future__ import annotations
 
