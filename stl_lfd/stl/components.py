@@ -86,7 +86,7 @@ class SpecParts:
     def compose(self, values: ArrayLike) -> float | np.ndarray:
         """The spec's robustness from its parts' values: `m` -> float, or `... x m` -> `...`."""
         values = np.asarray(values, dtype=float)
-        composed = self.semantics.conjunction(values, self.semantics.nu)
+        composed = self.semantics.kernels.conjunction(values)
         return float(composed) if values.ndim == 1 else composed
 
 

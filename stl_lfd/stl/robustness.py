@@ -30,14 +30,7 @@ from numpy.typing import ArrayLike
 from stl_lfd.choices import SEMANTICS
 from stl_lfd.errors import SignalError, SpecError, StlNameError
 from stl_lfd.stl import ast
-from stl_lfd.stl.kernels import (
-    classic_conjunction,
-    new_conjunction,
-    new_conjunction_of,
-    until_windows,
-    window_min,
-    window_reduce,
-)
+from stl_lfd.stl.kernels.semantics import KERNELS, Kernels
 from stl_lfd.stl.parser import MAX_DEPTH, parse, resolve
 from stl_lfd.stl.printer import format_formula
 
@@ -79,8 +72,9 @@ class Semantics:
             raise SpecError(f"nu must be a positive number (got {self.nu})")
 
     @property
-    def conjunction(self) -> Callable[[np.ndarray, float], np.ndarray]:
-        return classic_conjunction if self.name == "classic" else new_conjunction
+    def kernels(self) -> Kernels:
+        """What a conjunction, a window and an until are under this semantics."""
+        return KERNELS[self.name](self.nu)
 
 
 @dataclass(frozen=True)
@@ -447,20 +441,11 @@ def _not(node: ast.Not, children: list[Evaluator], semantics: Semantics) -> Eval
 
 
 def _nary(values: list[np.ndarray], semantics: Semantics, sign: float) -> np.ndarray:
-    """Conjunction (sign +1) or disjunction (sign -1) of the operands' values.
-
-    Classic chains reduce pairwise; the new conjunction weighs every operand against their
-    minimum (`new_conjunction_of`, operand by operand), and its disjunction is `!(!a & !b & ...)`.
-    """
-    if semantics.name == "classic":
-        pairwise = np.minimum if sign > 0 else np.maximum
-        result = values[0]
-        for value in values[1:]:
-            result = pairwise(result, value)
-        return result
+    """Conjunction (sign +1) or disjunction (sign -1) of the operands' values; a disjunction is
+    `!(!a & !b & ...)`."""
     if sign > 0:
-        return new_conjunction_of(values, semantics.nu)
-    return -new_conjunction_of([-value for value in values], semantics.nu)
+        return semantics.kernels.conjunction_of(values)
+    return -semantics.kernels.conjunction_of([-value for value in values])
 
 
 @_handles(ast.And)
@@ -495,11 +480,7 @@ def _always_evaluator(child: Evaluator, interval: ast.Interval | None, semantics
             return np.full((trace.batch, count), sign * np.inf)
         values = sign * child(trace, first, last + 1)
         width = hi - lo + 1
-        if semantics.name == "classic":
-            reduced = window_min(values, width, count)
-        else:
-            reduced = window_reduce(values, width, count, semantics.conjunction, semantics.nu)
-        return sign * reduced
+        return sign * semantics.kernels.windows(values, width, count)
 
     return evaluate
 
@@ -525,6 +506,6 @@ def _until(node: ast.Until, children: list[Evaluator], semantics: Semantics) -> 
         if hi < lo or start + lo > last:
             return np.full((trace.batch, count), -np.inf)
         lefts, rights = left(trace, start, last + 1), right(trace, start, last + 1)
-        return until_windows(lefts, rights, lo, hi + 1, count, semantics.conjunction, semantics.nu)
+        return semantics.kernels.until(lefts, rights, lo, hi + 1, count)
 
     return evaluate

@@ -1,4 +1,4 @@
-"""Until under the new robustness: the owner-sharing kernel of `kernels.until_windows` against
+"""Until under the new robustness: the owner-sharing kernel of `kernels.new_until` against
 the straightforward one it replaced (a `width x width` operand matrix per output), kept here as
 `reference_until`."""
 
@@ -10,8 +10,8 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from stl_lfd.signals import read_signal_csv
 from stl_lfd.stl import compile_spec, parse
-from stl_lfd.stl import robustness as robustness_module
-from stl_lfd.stl.kernels import budgets, classic_conjunction, interpolation, new_conjunction, new_disjunction, sums, until_windows
+from stl_lfd.stl.kernels import budgets, classic_until, interpolation, new_conjunction, new_disjunction, new_until, sums
+from stl_lfd.stl.kernels import semantics as kernel_semantics
 from stl_lfd.stl.kernels.memory import _pad
 from tests.conftest import ROOT
 
@@ -25,7 +25,7 @@ NUS = (0.5, 1.0, 2.0, 5.0)
 
 
 def reference_until(left: np.ndarray, right: np.ndarray, lo: int, width: int, count: int, nu: float) -> np.ndarray:
-    """`left U[lo, width-1] right` under the new robustness, as `until_windows` computed it
+    """`left U[lo, width-1] right` under the new robustness, as `new_until` computed it
     before: for each output, the new conjunction of every row of the `width x width` operand
     matrix (row j: left[i .. i+j-1], right[i+j], then +inf), then the new disjunction over j >= lo.
 
@@ -109,7 +109,7 @@ def test_random_operands_match_the_reference(seed):
         left, right, lo, width, count, nu = random_case(rng)
         with np.errstate(all="ignore"):
             expected = reference_until(left, right, lo, width, count, nu)
-        actual = until_windows(left, right, lo, width, count, new_conjunction, nu)
+        actual = new_until(left, right, lo, width, count, nu)
         assert actual.shape == expected.shape
         assert difference(actual, expected) <= TOLERANCE, (left, right, lo, width, count, nu, actual, expected)
 
@@ -126,8 +126,8 @@ def test_the_first_output_alone_matches_the_reference_and_the_first_of_two(seed)
             left, right = operands(rng, (2, samples)), operands(rng, (2, samples))
             width = int(rng.integers(1, samples + 3))
             lo = int(rng.integers(0, min(width, 3)))
-        alone = until_windows(left, right, lo, width, 1, new_conjunction, nu)
-        first_of_two = until_windows(left, right, lo, width, 2, new_conjunction, nu)[..., :1]
+        alone = new_until(left, right, lo, width, 1, nu)
+        first_of_two = new_until(left, right, lo, width, 2, nu)[..., :1]
         assert difference(alone, first_of_two) <= 1e-12, (left, right, lo, width, nu)
         with np.errstate(all="ignore"):
             assert difference(alone, reference_until(left, right, lo, width, 1, nu)) <= TOLERANCE
@@ -143,7 +143,7 @@ def test_extreme_magnitudes_and_sharpness(scale, nu):
         for count in (1, 4, 16):  # outputs near the start sum the rest of the window as totals
             with np.errstate(all="ignore"):
                 expected = reference_until(left, right, 0, 13, count, nu)
-            actual = until_windows(left, right, 0, 13, count, new_conjunction, nu)
+            actual = new_until(left, right, 0, 13, count, nu)
             assert difference(actual / scale, expected / scale) <= TOLERANCE
 
 
@@ -151,10 +151,10 @@ def test_chunked_outputs_match(monkeypatch):
     """Outputs are computed in chunks; a tiny chunk size gives the same values."""
     rng = np.random.default_rng(3)
     left, right = rng.normal(size=(2, 2, 40))
-    expected = until_windows(left, right, 2, 30, 40, new_conjunction, 1.0)
+    expected = new_until(left, right, 2, 30, 40, 1.0)
     monkeypatch.setattr(budgets, "CHUNK_ELEMENTS", 50)
     monkeypatch.setattr(budgets, "BLOCK_ELEMENTS", 7)
-    assert difference(until_windows(left, right, 2, 30, 40, new_conjunction, 1.0), expected) <= 1e-12
+    assert difference(new_until(left, right, 2, 30, 40, 1.0), expected) <= 1e-12
 
 
 def test_special_operands():
@@ -172,13 +172,13 @@ def test_special_operands():
         left, right = np.array(left), np.array(right)
         for lo in range(left.size):
             expected = reference_until(left, right, lo, left.size, left.size, nu)
-            actual = until_windows(left, right, lo, left.size, left.size, new_conjunction, nu)
+            actual = new_until(left, right, lo, left.size, left.size, nu)
             assert difference(actual, expected) <= TOLERANCE, (left, right, lo, actual, expected)
 
 
 def test_classic_is_unchanged():
     left, right = np.random.default_rng(0).normal(size=(2, 20))
-    actual = until_windows(left, right, 1, 5, 20, classic_conjunction, 1.0)
+    actual = classic_until(left, right, 1, 5, 20)
     expected = [max(min([right[i + j]] + list(left[i : i + j])) for j in range(1, 5) if i + j < 20) if i + 1 < 20 else -np.inf for i in range(20)]
     assert np.array_equal(actual, expected)
 
@@ -197,9 +197,7 @@ NESTED = [
 ]
 
 
-def reference_evaluator(left, right, lo, width, count, conjunction, nu):
-    if conjunction is classic_conjunction:
-        return until_windows(left, right, lo, width, count, conjunction, nu)
+def reference_evaluator(left, right, lo, width, count, nu):
     with np.errstate(all="ignore"):
         return reference_until(left, right, lo, width, count, nu)
 
@@ -213,7 +211,7 @@ def test_nested_formulas_match_the_reference(text, nu, monkeypatch):
     signals = {name: np.cumsum(rng.normal(0, 0.2, size=(3, times.size)), axis=-1) for name in "xyz"}
     compiled = compile_spec(parse(text), "new", nu)
     actual = compiled.trace(signals, times)
-    monkeypatch.setattr(robustness_module, "until_windows", reference_evaluator)
+    monkeypatch.setattr(kernel_semantics, "new_until", reference_evaluator)
     expected = compile_spec(parse(text), "new", nu).trace(signals, times)
     assert difference(actual, expected) <= TOLERANCE
 
@@ -226,7 +224,7 @@ def test_a_long_trace_matches_the_reference():
     for left, right in ((x - 0.4, y - 0.15), (z - 0.39, x - 0.5)):  # z is constant: a flat left
         for lo, width, count in ((0, 2200, 1), (100, 400, 1), (0, 300, 40)):
             expected = reference_until(left, right, lo, width, count, 1.0)
-            assert difference(until_windows(left, right, lo, width, count, new_conjunction, 1.0), expected) <= TOLERANCE
+            assert difference(new_until(left, right, lo, width, count, 1.0), expected) <= TOLERANCE
 
 
 # --- Long sums by interpolation -------------------------------------------------------------
@@ -284,12 +282,12 @@ def test_owners_far_below_their_samples_at_small_nu():
     right = -2e-6 * (1 + 0.01 * np.sin(samples / 7))
     with np.errstate(all="ignore"):
         expected = reference_until(left, right, 0, 600, 1, 0.01)
-    assert difference(until_windows(left, right, 0, 600, 1, new_conjunction, 0.01), expected) <= 1e-12
+    assert difference(new_until(left, right, 0, 600, 1, 0.01), expected) <= 1e-12
     left, right = 58 + 156 * np.arange(1000) / 1000, -np.ones(1000)
     for nu in (0.1, 0.5, 1.0):
         with np.errstate(all="ignore"):
             expected = reference_until(left, right, 0, 1000, 1, nu)
-        assert difference(until_windows(left, right, 0, 1000, 1, new_conjunction, nu), expected) <= 1e-12
+        assert difference(new_until(left, right, 0, 1000, 1, nu), expected) <= 1e-12
 
 
 def test_an_owner_of_only_infinite_samples_in_a_constant_row(monkeypatch):
@@ -334,5 +332,5 @@ def test_long_top_level_untils_match_the_reference(seed, monkeypatch):
             count = int(rng.integers(1, 4))
             with np.errstate(all="ignore"):
                 expected = reference_until(left, right, 0, samples, count, nu)
-            actual = until_windows(left, right, 0, samples, count, new_conjunction, nu)
+            actual = new_until(left, right, 0, samples, count, nu)
             assert difference(actual, expected) <= TOLERANCE

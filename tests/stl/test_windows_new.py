@@ -9,7 +9,7 @@ import pytest
 from numpy.lib.stride_tricks import sliding_window_view
 
 from stl_lfd.stl import compile_spec, parse
-from stl_lfd.stl.kernels import budgets, interpolation, new_conjunction, window_reduce
+from stl_lfd.stl.kernels import budgets, interpolation, new_conjunction, new_windows
 from stl_lfd.stl.kernels.memory import _pad
 
 pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")
@@ -64,7 +64,7 @@ def test_wide_windows_match_the_direct_conjunction(seed, free, monkeypatch):
         width, count = int(rng.integers(64, min(samples, 400) + 1)), int(rng.integers(2, samples + 1))
         with np.errstate(all="ignore"):
             expected = direct_windows(values, width, count, nu)
-        actual = window_reduce(values, width, count, new_conjunction, nu)
+        actual = new_windows(values, width, count, nu)
         assert actual.shape == expected.shape
         assert difference(actual, expected) <= 1e-12
 
@@ -82,7 +82,7 @@ def test_the_interpolation_is_taken_on_a_trajectory():
 
     interpolation._node_sums = counting
     try:
-        actual = window_reduce(values, 500, 2200, new_conjunction, 1.0)
+        actual = new_windows(values, 500, 2200, 1.0)
     finally:
         interpolation._node_sums = original
     assert sum(taken) > 1100

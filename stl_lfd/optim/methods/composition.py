@@ -86,8 +86,9 @@ def through_routes(samples: torch.Tensor, parts: int, route_parts: tuple[int, ..
 def compose(values: torch.Tensor, semantics: Semantics, groups: int = 1) -> torch.Tensor:
     """The spec's robustness from its parts' values: `... x m` -> `...`.
 
-    The same formulas as `stl_lfd.stl` (minimum for classic, the new robustness's n-ary
-    conjunction), written so that gradients stay finite in both branches. With `groups`, the
+    The same formulas as `stl_lfd.stl.kernels.conjunction` (minimum for classic,
+    `new_conjunction` for the new robustness), mirrored in torch so that gradients stay finite in
+    both branches; tests/optim/test_composite.py holds the two equal. With `groups`, the
     `m` values are that many groups of parts side by side, and the result is the minimum of
     the groups' compositions."""
     if groups > 1:

@@ -1,6 +1,8 @@
 """The numerical kernels of the robustness semantics: n-ary conjunctions and sliding windows,
 one module per operator, vectorised over any leading axes.
 
+    semantics.py       the two semantics as strategies (ClassicKernels, NewKernels): what a
+                       conjunction, a window and an until are in each; the compiler asks them
     conjunction.py     the classic minimum and the new robustness's conjunction and disjunction
                        (the new conjunction's formula is written once, here)
     windows.py         sliding minima and window conjunctions (G, F with a bounded interval)
@@ -16,7 +18,21 @@ disjunction. Every kernel is tested against the brute-force definitions of
 """
 
 from stl_lfd.stl.kernels.conjunction import classic_conjunction, new_conjunction, new_conjunction_of, new_disjunction
-from stl_lfd.stl.kernels.until import until_windows
-from stl_lfd.stl.kernels.windows import suffix_min, window_min, window_reduce
+from stl_lfd.stl.kernels.semantics import KERNELS, ClassicKernels, NewKernels
+from stl_lfd.stl.kernels.until import classic_until, new_until
+from stl_lfd.stl.kernels.windows import new_windows, suffix_min, window_min
 
-__all__ = ["classic_conjunction", "new_conjunction", "new_conjunction_of", "new_disjunction", "suffix_min", "until_windows", "window_min", "window_reduce"]
+__all__ = [
+    "KERNELS",
+    "ClassicKernels",
+    "NewKernels",
+    "classic_conjunction",
+    "classic_until",
+    "new_conjunction",
+    "new_conjunction_of",
+    "new_disjunction",
+    "new_until",
+    "new_windows",
+    "suffix_min",
+    "window_min",
+]

@@ -26,14 +26,14 @@ import numpy as np
 from numpy.lib.stride_tricks import as_strided, sliding_window_view
 
 from stl_lfd.stl.kernels import budgets
-from stl_lfd.stl.kernels.conjunction import _disjunction, classic_conjunction
+from stl_lfd.stl.kernels.conjunction import _disjunction
 from stl_lfd.stl.kernels.memory import _pad
 from stl_lfd.stl.kernels.sums import _cumulative_sums, _tail_sums
 from stl_lfd.stl.kernels.terms import _terms
 
 
-def until_windows(left: np.ndarray, right: np.ndarray, lo: int, width: int, count: int, conjunction, nu: float) -> np.ndarray:
-    """`left U[lo, width-1] right` at each of `count` outputs.
+def classic_until(left: np.ndarray, right: np.ndarray, lo: int, width: int, count: int) -> np.ndarray:
+    """`left U[lo, width-1] right` under the classic robustness at each of `count` outputs.
 
     For output i: the disjunction over j in [lo, width-1] of the conjunction of right[i + j]
     and left[i], ..., left[i + j - 1]. Samples past the end do not count.
@@ -43,13 +43,10 @@ def until_windows(left: np.ndarray, right: np.ndarray, lo: int, width: int, coun
         lo: first window offset in samples.
         width: window length in samples (offsets 0 .. width-1).
         count: number of outputs.
-        conjunction: `classic_conjunction` or `new_conjunction`.
 
     Returns:
         `... x count` array.
     """
-    if conjunction is not classic_conjunction:
-        return _new_until(np.asarray(left, dtype=float), np.asarray(right, dtype=float), lo, width, count, nu)
     length = count + width - 1
     left_windows = sliding_window_view(_pad(left, length, np.inf), width, axis=-1)
     right_windows = sliding_window_view(_pad(right, length, -np.inf), width, axis=-1)
@@ -67,8 +64,10 @@ def until_windows(left: np.ndarray, right: np.ndarray, lo: int, width: int, coun
     return np.concatenate(parts, axis=-1)
 
 
-def _new_until(left: np.ndarray, right: np.ndarray, lo: int, width: int, count: int, nu: float) -> np.ndarray:
-    """`until_windows` under the new robustness: `... x n` operands -> `... x count`."""
+def new_until(left: np.ndarray, right: np.ndarray, lo: int, width: int, count: int, nu: float) -> np.ndarray:
+    """`classic_until` under the new robustness with sharpness `nu`: `... x n` operands ->
+    `... x count` (see the module's docstring for how)."""
+    left, right = np.asarray(left, dtype=float), np.asarray(right, dtype=float)
     shape = left.shape[:-1]
     if lo >= width:
         return np.full(shape + (count,), -np.inf)

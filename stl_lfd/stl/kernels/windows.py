@@ -45,8 +45,9 @@ def suffix_min(values: np.ndarray) -> np.ndarray:
     return np.minimum.accumulate(values[..., ::-1], axis=-1)[..., ::-1]
 
 
-def window_reduce(values: np.ndarray, width: int, count: int, reduce, nu: float) -> np.ndarray:
-    """Forward sliding n-ary reduction `reduce(values[..., i : i + width], nu)`, O(count x width).
+def new_windows(values: np.ndarray, width: int, count: int, nu: float) -> np.ndarray:
+    """Forward sliding new conjunction `new_conjunction(values[..., i : i + width], nu)`,
+    O(count x width), by interpolation when windows are long.
 
     Windows past the end are padded with +inf, the identity of a conjunction.
 
@@ -54,23 +55,23 @@ def window_reduce(values: np.ndarray, width: int, count: int, reduce, nu: float)
         values: `... x n` array.
         width: window length in samples.
         count: number of outputs.
-        reduce: a conjunction such as `new_conjunction`.
+        nu: sharpness, > 0.
 
     Returns:
         `... x count` array.
     """
-    if reduce is new_conjunction and width >= budgets.INTERPOLATED_WIDTH_MIN and count > 1:
+    if width >= budgets.INTERPOLATED_WIDTH_MIN and count > 1:
         return _interpolated_windows(values, width, count, nu)
     values = _pad(values, count + width - 1, np.inf)
     windows = sliding_window_view(values, width, axis=-1)  # ... x (n - width + 1) x width
     batch = int(np.prod(values.shape[:-1], dtype=int))
     step = max(1, budgets.CHUNK_ELEMENTS // max(1, batch * width))
-    parts = [reduce(windows[..., begin : min(begin + step, count), :], nu) for begin in range(0, count, step)]
+    parts = [new_conjunction(windows[..., begin : min(begin + step, count), :], nu) for begin in range(0, count, step)]
     return np.concatenate(parts, axis=-1)
 
 
 def _interpolated_windows(values: np.ndarray, width: int, count: int, nu: float) -> np.ndarray:
-    """`window_reduce(values, width, count, new_conjunction, nu)`: each window's weights and
+    """`new_windows(values, width, count, nu)` by interpolation: each window's weights and
     numerators, under its minimum, by interpolation over its group's span where that is exact,
     term by term elsewhere."""
     shape = values.shape[:-1]
