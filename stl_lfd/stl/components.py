@@ -35,7 +35,8 @@ from numpy.typing import ArrayLike
 from stl_lfd.stl import ast
 from stl_lfd.stl.parser import resolve
 from stl_lfd.stl.printer import format_formula
-from stl_lfd.stl.robustness import Robustness, Semantics, SemanticsName, compile_spec
+from stl_lfd.stl.robustness import Robustness, compile_spec
+from stl_lfd.stl.semantics import Semantics, SemanticsName
 
 
 @dataclass(frozen=True)

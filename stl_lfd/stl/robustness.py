@@ -19,24 +19,19 @@ code is refused here).
 
 from __future__ import annotations
 
-import math
 import warnings
-from dataclasses import dataclass, field
-from typing import Callable, Iterator, Literal, Mapping
+from typing import Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from stl_lfd.choices import SEMANTICS
 from stl_lfd.errors import SignalError, SpecError, StlNameError
 from stl_lfd.stl import ast
-from stl_lfd.stl.kernels.semantics import KERNELS, Kernels
+from stl_lfd.stl.evaluators import TIME_TOLERANCE, Trace, compile_formula, distinct_nodes
 from stl_lfd.stl.parser import MAX_DEPTH, parse, resolve
 from stl_lfd.stl.printer import format_formula
+from stl_lfd.stl.semantics import Semantics, SemanticsName
 
-SemanticsName = Literal["classic", "new"]
-# Sample times within this of a window's end belong to the window.
-TIME_TOLERANCE = 1e-9
 # Sampling counts as uniform when every step is within this fraction of the mean step.
 UNIFORM_STEP_TOLERANCE = 0.01
 
@@ -58,42 +53,6 @@ OPERATIONS_PER_SECOND = 5e7
 COSTLY_SECONDS = 30.0
 
 
-@dataclass(frozen=True)
-class Semantics:
-    """Which robustness to compute: `classic` space robustness or `new` with sharpness `nu`."""
-
-    name: SemanticsName = "classic"
-    nu: float = 1.0
-
-    def __post_init__(self) -> None:
-        if self.name not in SEMANTICS:
-            raise SpecError(f"unknown semantics '{self.name}'; choose one of {', '.join(SEMANTICS)}")
-        if not (math.isfinite(self.nu) and self.nu > 0):
-            raise SpecError(f"nu must be a positive number (got {self.nu})")
-
-    @property
-    def kernels(self) -> Kernels:
-        """What a conjunction, a window and an until are under this semantics."""
-        return KERNELS[self.name](self.nu)
-
-
-@dataclass(frozen=True)
-class _Trace:
-    """Signals of a batch of equally long traces, uniformly sampled."""
-
-    signals: Mapping[str, np.ndarray]  # name -> B x T
-    elapsed: np.ndarray  # T: times since the first sample
-    batch: int
-    shared: dict[tuple[int, int, int], np.ndarray] = field(default_factory=dict)  # values of shared nodes
-
-    @property
-    def length(self) -> int:
-        return self.elapsed.size
-
-
-Evaluator = Callable[[_Trace, int, int], np.ndarray]
-
-
 class Robustness:
     """The robustness function of one formula under one semantics.
 
@@ -109,7 +68,7 @@ class Robustness:
         self.semantics = semantics
         self.source = source
         with ast.collector_paused():
-            compiled = _compile(formula, semantics)
+            compiled = compile_formula(formula, semantics)
         if compiled.depth > MAX_DEPTH:
             raise SpecError(f"the formula nests more than {MAX_DEPTH} levels deep; simplify it", source)
         self.signals = compiled.signals
@@ -117,7 +76,7 @@ class Robustness:
         # The bounded `G`/`F` and their window lengths (s), for the cost warning of `_prepare`.
         self._windows = [
             (node, node.interval.hi - node.interval.lo)
-            for node in (_distinct(formula) if semantics.name == "new" else ())
+            for node in (distinct_nodes(formula) if semantics.name == "new" else ())
             if isinstance(node, (ast.Always, ast.Eventually)) and node.interval is not None
         ]
         self._warned_of_cost = False
@@ -143,18 +102,18 @@ class Robustness:
         values = self._located(trace, 0, trace.length)
         return values if batched else values[0]
 
-    def _located(self, trace: _Trace, start: int, stop: int) -> np.ndarray:
+    def _located(self, trace: Trace, start: int, stop: int) -> np.ndarray:
         try:
             return self._evaluate(trace, start, stop)
         except SpecError as error:
             raise SpecError(error.message, self.source) from None
 
-    def _prepare(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> tuple[_Trace, bool]:
+    def _prepare(self, signals: Mapping[str, ArrayLike], times: ArrayLike) -> tuple[Trace, bool]:
         times = np.asarray(times, dtype=float)
         arrays = {name: np.asarray(signals[name], dtype=float) for name in self.signals if name in signals}
         missing = sorted(self.signals - arrays.keys())
         if missing:
-            node = next(n for n in _distinct(self.formula) if isinstance(n, ast.Signal) and n.name == missing[0])
+            node = next(n for n in distinct_nodes(self.formula) if isinstance(n, ast.Signal) and n.name == missing[0])
             available = ", ".join(sorted(signals)) or "none"
             raise StlNameError(f"unknown signal '{node.name}' (the trace has: {available})", node.source, node.line, node.column)
         _check_times(times)
@@ -171,7 +130,7 @@ class Robustness:
                 stacklevel=3,
             )
         self._warn_of_cost(times, batch)
-        return _Trace(arrays, times - times[0], batch), batched
+        return Trace(arrays, times - times[0], batch), batched
 
     def _warn_of_cost(self, times: np.ndarray, batch: int) -> None:
         """A CostWarning, the first time an evaluation is estimated to take over `COSTLY_SECONDS`."""
@@ -232,34 +191,6 @@ def _check_times(times: np.ndarray) -> None:
         raise SignalError(f"sample times are not uniform (steps from {steps.min():g} to {steps.max():g} s); resample the signal")
 
 
-def _window(interval: ast.Interval | None, trace: _Trace, start: int) -> tuple[int, int]:
-    """First and last sample offsets covered by `interval` (the whole rest of the trace if None).
-
-    Offsets are measured on the trace's own times from its first sample, so the window is exact
-    at the first sample; uniform sampling makes the same offsets right at every other sample.
-    An empty window comes back with last < first.
-    """
-    last = trace.length - 1 - start
-    if interval is None:
-        return 0, last
-    lo = int(np.searchsorted(trace.elapsed, interval.lo - TIME_TOLERANCE, side="left"))
-    hi = int(np.searchsorted(trace.elapsed, interval.hi + TIME_TOLERANCE, side="right")) - 1
-    return lo, min(hi, last)
-
-
-def _distinct(formula: ast.Node) -> Iterator[ast.Node]:
-    """Each node of `formula` once, depth first in the order of the text, however often it is
-    shared."""
-    seen: set[int] = set()
-    stack = [formula]
-    while stack:
-        node = stack.pop()
-        if id(node) not in seen:
-            seen.add(id(node))
-            yield node
-            stack.extend(reversed(node.children()))
-
-
 def _shown(node: ast.Node, most: int = 500) -> str:
     """`node` as text, or its operator alone when the text would spell out more than `most`
     nodes (shared definitions can make a small graph print as a huge formula)."""
@@ -271,241 +202,3 @@ def _shown(node: ast.Node, most: int = 500) -> str:
     interval = getattr(node, "interval", None)
     window = "" if interval is None else f"[{interval.lo:g}, {interval.hi:g}]"
     return f"{'G' if isinstance(node, ast.Always) else 'F'}{window} (...)"
-
-
-_COMPILERS: dict[type, Callable[[ast.Node, list[Evaluator], Semantics], Evaluator]] = {}
-
-
-def _handles(node_type: type):
-    def register(function):
-        _COMPILERS[node_type] = function
-        return function
-
-    return register
-
-
-@dataclass(frozen=True)
-class _Compiled:
-    """What `_compile` finds in one pass over a formula."""
-
-    evaluate: Evaluator
-    depth: int  # levels of nesting
-    horizon: float  # seconds
-    signals: frozenset[str]
-
-
-def _compile(formula: ast.Formula, semantics: Semantics) -> _Compiled:
-    """The evaluator of `formula`, built children first without recursion, each distinct node
-    once (a node with several parents is wrapped to be computed once per range of samples),
-    with the formula's depth, horizon and signals found on the way."""
-    shared: set[int] = set()
-    evaluators: dict[int, Evaluator] = {}
-    extents: dict[int, tuple[int, float]] = {}  # id -> (depth, horizon)
-    signals: set[str] = set()
-    for node in ast.post_order(formula, _parts, shared):
-        try:
-            compiler = _COMPILERS[type(node)]
-        except KeyError:
-            raise TypeError(f"cannot compile node of type {type(node).__name__}") from None
-        parts = _parts(node)
-        evaluator = compiler(node, [evaluators[id(part)] for part in parts], semantics)
-        evaluators[id(node)] = _computed_once(evaluator) if id(node) in shared else evaluator
-        if parts:
-            depth, reach = max(extents[id(part)][0] for part in parts), max(extents[id(part)][1] for part in parts)
-            interval = getattr(node, "interval", None)
-            extents[id(node)] = (depth + 1, reach + interval.hi if interval is not None else reach)
-        elif type(node) is ast.Compare:  # a signal against a number
-            signals.add(_signal_versus_number(node)[0])  # type: ignore[index]
-            extents[id(node)] = (2, 0.0)
-        else:
-            if type(node) is ast.Signal:
-                signals.add(node.name)  # type: ignore[attr-defined]
-            extents[id(node)] = (1, 0.0)
-    depth, reach = extents[id(formula)]
-    return _Compiled(evaluators[id(formula)], depth, reach, frozenset(signals))
-
-
-def _parts(node: ast.Node) -> tuple[ast.Node, ...]:
-    """The children the compiler needs: none for a comparison of a signal with a number, which
-    compiles to one function (the commonest predicate, thousands of them in a large spec)."""
-    return () if _signal_versus_number(node) is not None else node.children()
-
-
-def _signal_versus_number(node: ast.Node) -> tuple[str, float, bool] | None:
-    """(signal, number, signal on the left) of `x > 1` or `1 < x`, else None."""
-    if type(node) is ast.Compare:
-        left, right = node.left, node.right
-        if type(left) is ast.Signal and type(right) is ast.Const:
-            return left.name, right.value, True
-        if type(left) is ast.Const and type(right) is ast.Signal:
-            return right.name, left.value, False
-    return None
-
-
-def _computed_once(evaluate: Evaluator) -> Evaluator:
-    """`evaluate` for a node with several parents: each range of samples is computed once per
-    trace. (No evaluator writes into the arrays its operands return.)"""
-
-    def shared(trace: _Trace, start: int, stop: int) -> np.ndarray:
-        key = (id(shared), start, stop)
-        if key not in trace.shared:
-            trace.shared[key] = evaluate(trace, start, stop)
-        return trace.shared[key]
-
-    return shared
-
-
-@_handles(ast.Const)
-def _const(node: ast.Const, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    return lambda trace, start, stop: np.full((trace.batch, stop - start), node.value)
-
-
-@_handles(ast.Signal)
-def _signal(node: ast.Signal, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    return lambda trace, start, stop: trace.signals[node.name][:, start:stop]
-
-
-@_handles(ast.Minus)
-def _minus(node: ast.Minus, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    (operand,) = children
-    return lambda trace, start, stop: -operand(trace, start, stop)
-
-
-@_handles(ast.Abs)
-def _abs(node: ast.Abs, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    (operand,) = children
-    return lambda trace, start, stop: np.abs(operand(trace, start, stop))
-
-
-_ARITHMETIC = {
-    ast.ArithOp.ADD: np.add,
-    ast.ArithOp.SUB: np.subtract,
-    ast.ArithOp.MUL: np.multiply,
-    ast.ArithOp.DIV: np.divide,
-}
-
-
-@_handles(ast.Arith)
-def _arith(node: ast.Arith, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    (left, right), operation = children, _ARITHMETIC[node.op]
-
-    def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return operation(left(trace, start, stop), right(trace, start, stop))
-
-    return evaluate
-
-
-@_handles(ast.Compare)
-def _compare(node: ast.Compare, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    greater = node.op in (ast.Comparator.GT, ast.Comparator.GE)
-    simple = _signal_versus_number(node)
-    if simple is not None:  # `signal - number` or `number - signal`, as the general case computes it
-        name, number, signal_left = simple
-        if greater == signal_left:
-            return _finite_predicate(node, lambda trace, start, stop: trace.signals[name][:, start:stop] - number)
-        return _finite_predicate(node, lambda trace, start, stop: number - trace.signals[name][:, start:stop])
-    left, right = children if greater else reversed(children)
-    return _finite_predicate(node, lambda trace, start, stop: left(trace, start, stop) - right(trace, start, stop))
-
-
-@_handles(ast.InRange)
-def _in_range(node: ast.InRange, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    (expr,) = children
-    half_width, centre = (node.hi - node.lo) / 2, (node.hi + node.lo) / 2
-    return _finite_predicate(node, lambda trace, start, stop: half_width - np.abs(expr(trace, start, stop) - centre))
-
-
-def _finite_predicate(node: ast.Formula, evaluate: Evaluator) -> Evaluator:
-    """`evaluate`, refusing infinite or NaN robustness (a division by zero or an overflow in
-    the predicate's arithmetic), which would otherwise count as satisfied or poison the min."""
-
-    def checked(trace: _Trace, start: int, stop: int) -> np.ndarray:
-        with np.errstate(all="ignore"):
-            values = evaluate(trace, start, stop)
-        if not np.all(np.isfinite(values)):
-            sample = start + int(np.argwhere(~np.isfinite(values))[0][1])
-            kind = "NaN" if np.isnan(values).any() else "infinite"
-            raise SpecError(
-                f"the predicate `{format_formula(node)}` is {kind} at t = {trace.elapsed[sample]:g} s (a division by zero or an overflow in its arithmetic)"
-            )
-        return values
-
-    return checked
-
-
-@_handles(ast.Not)
-def _not(node: ast.Not, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    (child,) = children
-    return lambda trace, start, stop: -child(trace, start, stop)
-
-
-def _nary(values: list[np.ndarray], semantics: Semantics, sign: float) -> np.ndarray:
-    """Conjunction (sign +1) or disjunction (sign -1) of the operands' values; a disjunction is
-    `!(!a & !b & ...)`."""
-    if sign > 0:
-        return semantics.kernels.conjunction_of(values)
-    return -semantics.kernels.conjunction_of([-value for value in values])
-
-
-@_handles(ast.And)
-@_handles(ast.Or)
-def _and_or(node: ast.And | ast.Or, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    sign = 1.0 if isinstance(node, ast.And) else -1.0
-
-    def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
-        values = []
-        for operand in children:  # a loop, not a comprehension: one stack frame per level
-            values.append(operand(trace, start, stop))
-        return _nary(values, semantics, sign)
-
-    return evaluate
-
-
-@_handles(ast.Implies)
-def _implies(node: ast.Implies, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    """`!a | b`."""
-    left, right = children
-    return lambda trace, start, stop: _nary([-left(trace, start, stop), right(trace, start, stop)], semantics, -1.0)
-
-
-def _always_evaluator(child: Evaluator, interval: ast.Interval | None, semantics: Semantics, sign: float) -> Evaluator:
-    """`G` (sign +1) or, as `!G!`, `F` (sign -1) over `interval`."""
-
-    def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
-        lo, hi = _window(interval, trace, start)
-        count = stop - start
-        first, last = start + lo, min(stop - 1 + hi, trace.length - 1)
-        if hi < lo or first > last:
-            return np.full((trace.batch, count), sign * np.inf)
-        values = sign * child(trace, first, last + 1)
-        width = hi - lo + 1
-        return sign * semantics.kernels.windows(values, width, count)
-
-    return evaluate
-
-
-@_handles(ast.Always)
-def _always(node: ast.Always, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    return _always_evaluator(children[0], node.interval, semantics, 1.0)
-
-
-@_handles(ast.Eventually)
-def _eventually(node: ast.Eventually, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    return _always_evaluator(children[0], node.interval, semantics, -1.0)
-
-
-@_handles(ast.Until)
-def _until(node: ast.Until, children: list[Evaluator], semantics: Semantics) -> Evaluator:
-    left, right = children
-
-    def evaluate(trace: _Trace, start: int, stop: int) -> np.ndarray:
-        lo, hi = _window(node.interval, trace, start)
-        count = stop - start
-        last = min(stop - 1 + hi, trace.length - 1)
-        if hi < lo or start + lo > last:
-            return np.full((trace.batch, count), -np.inf)
-        lefts, rights = left(trace, start, last + 1), right(trace, start, last + 1)
-        return semantics.kernels.until(lefts, rights, lo, hi + 1, count)
-
-    return evaluate

@@ -24,7 +24,8 @@ from stl_lfd.stl import ast
 from stl_lfd.stl.components import SpecParts, split_spec
 from stl_lfd.stl.parser import load_spec, parse
 from stl_lfd.stl.printer import format_spec
-from stl_lfd.stl.robustness import Robustness, SemanticsName, compile_spec
+from stl_lfd.stl.robustness import Robustness, compile_spec
+from stl_lfd.stl.semantics import SemanticsName
 
 
 @dataclass(frozen=True)
