@@ -8,36 +8,17 @@ concatenated with their `lengths`, and `_check()` validates the parameters befor
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
 
 import numpy as np
 
 import stl_lfd.rotations as rotations
 from stl_lfd.errors import ModelError
+from stl_lfd.hsmm import em
 from stl_lfd.hsmm._forward import duration_pmf, hmm_posteriors, state_occupancy
 from stl_lfd.hsmm.orientation import Coordinates, to_model_columns
 from stl_lfd.hsmm.spread import MinimumSpread, widened
 
 logger = logging.getLogger(__name__)
-
-
-@dataclass
-class ConvergenceMonitor:
-    """Log-likelihood history of EM; `converged` once an iteration gains less than `tol`."""
-
-    tol: float
-    n_iter: int
-    history: list[float] = field(default_factory=list)
-
-    def report(self, log_likelihood: float) -> None:
-        logger.debug("EM iteration %d: log-likelihood %.6f", len(self.history) + 1, log_likelihood)
-        self.history.append(log_likelihood)
-
-    @property
-    def converged(self) -> bool:
-        if len(self.history) >= self.n_iter:
-            return True
-        return len(self.history) >= 2 and self.history[-1] - self.history[-2] < self.tol
 
 
 class HSMM:
@@ -111,9 +92,9 @@ class HSMM:
         sequences = np.split(X, np.cumsum(lengths)[:-1])
         best = None
         for start in range(max(self.n_init, 1)):
-            self._init_kbins(sequences, None if start == 0 else np.random.default_rng(start))
+            em.kbins_start(self, sequences, None if start == 0 else np.random.default_rng(start))
             try:
-                gamma = self._em(sequences, lengths)
+                gamma = em.baum_welch(self, sequences, lengths)
             except (ValueError, np.linalg.LinAlgError, ModelError):
                 if start == 0:
                     raise
@@ -123,8 +104,8 @@ class HSMM:
         _, learned, gamma = best
         for name, value in learned.items():
             setattr(self, name, value)
-        self._fit_durations(gamma, lengths)
-        self._fit_end(np.array([sequence[-1] for sequence in sequences]))
+        em.fit_durations(self, gamma, lengths)
+        em.fit_end(self, np.array([sequence[-1] for sequence in sequences]))
         if self.min_spread is not None:
             self._widen(self.min_spread)
         self._check()
@@ -140,31 +121,14 @@ class HSMM:
         """The EM's results so far (to keep the best of several starts)."""
         return {name: getattr(self, name) for name in ("means_", "covars_", "startprob_", "transmat_", "monitor_")}
 
-    def _em(self, sequences: list[np.ndarray], lengths: np.ndarray) -> np.ndarray:
-        """Baum-Welch from the current means and covariances: sets the parameters and
-        `monitor_`, returns the last posteriors (`B x T x K`)."""
-        padded = _pad(sequences)
-        self.monitor_ = ConvergenceMonitor(self.tol, self.n_iter)
-        transmat = self._left_right_start(lengths)
-        valid = np.arange(padded.shape[1])[None, :] < lengths[:, None]
-        while True:
-            likelihood, log_scale = self._frame_likelihood(padded)
-            gamma, xi_sum, log_likelihood = hmm_posteriors(self.startprob_, transmat, likelihood, lengths)
-            self.monitor_.report(float(log_likelihood.sum() + log_scale[valid].sum()))
-            transmat = self._m_step(padded, gamma, xi_sum, lengths)
-            if self.monitor_.converged:
-                break
-        self._set_transitions(transmat)
-        return gamma
-
     def predict(self, X: np.ndarray, lengths: np.ndarray | None = None) -> np.ndarray:
         """Most likely state at each sample (HMM posteriors with self-transitions restored
         from the duration means), `N` integers."""
         self._check()
         X = np.asarray(X, dtype=float)
         lengths = np.array([len(X)]) if lengths is None else np.asarray(lengths, dtype=int)
-        padded = _pad(np.split(X, np.cumsum(lengths)[:-1]))
-        gamma, _, _ = hmm_posteriors(self.startprob_, self._hmm_transmat(), self._frame_likelihood(padded)[0], lengths)
+        padded = em.pad_sequences(np.split(X, np.cumsum(lengths)[:-1]))
+        gamma, _, _ = hmm_posteriors(self.startprob_, self._hmm_transmat(), em.frame_likelihood(self, padded)[0], lengths)
         return np.concatenate([gamma[b, : lengths[b]].argmax(axis=1) for b in range(len(lengths))])
 
     # --- generation ------------------------------------------------------------------------
@@ -337,26 +301,6 @@ class HSMM:
                 f"K = {self.n_states} states need demonstrations of at least {self.n_states} samples (the shortest has {shortest}); use a smaller K"
             )
 
-    def _init_kbins(self, sequences: list[np.ndarray], rng: np.random.Generator | None = None) -> None:
-        """k-bins: cut every demonstration into K equal time bins (with `rng`, K bins of random
-        lengths); state k starts as bin k."""
-        K, D = self.n_states, sequences[0].shape[1]
-        if rng is None:
-            bins = [np.array_split(sequence, K) for sequence in sequences]
-        else:
-            bins = [np.split(sequence, np.sort(rng.choice(np.arange(1, len(sequence)), K - 1, replace=False))) for sequence in sequences]
-        pooled = [np.concatenate([b[k] for b in bins]) for k in range(K)]
-        coordinates = self.coordinates()
-        if not coordinates.rotations:
-            self.means_ = np.array([samples.mean(axis=0) for samples in pooled])
-            covars = [np.atleast_2d(np.cov(samples.T, bias=True)) if len(samples) > 1 else np.zeros((D, D)) for samples in pooled]
-        else:
-            self.means_ = np.array([coordinates.mean(samples, np.ones(len(samples))) for samples in pooled])
-            deviations = [coordinates.deviations(samples, mean) for samples, mean in zip(pooled, self.means_)]
-            covars = [deviation.T @ deviation / len(deviation) for deviation in deviations]
-        self.covars_ = self._constrained(np.array(covars)) + self.reg_covar * np.eye(D)
-        self.startprob_ = np.eye(K)[0]
-
     def coordinates(self) -> Coordinates:
         """Where the model's columns hold an orientation (see `stl_lfd.hsmm.orientation`)."""
         return Coordinates.of(self.feature_names)
@@ -364,85 +308,6 @@ class HSMM:
     def _constrained(self, covars: np.ndarray) -> np.ndarray:
         """The covariances EM may use (all of them here; block-diagonal in `TPHSMM`)."""
         return covars
-
-    def _left_right_start(self, lengths: np.ndarray) -> np.ndarray:
-        K = self.n_states
-        leave = min(0.5, K / float(np.mean(lengths)))
-        transmat = np.eye(K) * (1 - leave) + np.eye(K, k=1) * leave
-        transmat[-1, -1] = 1.0
-        return transmat
-
-    def _frame_likelihood(self, padded: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """`B x T x K` Gaussian likelihoods divided by their largest value per frame, and the
-        `B x T` logs of those divisors (which the log-likelihood adds back)."""
-        coordinates = self.coordinates()
-        if not coordinates.rotations:
-            log_likelihood = np.stack([gaussian_log_density(padded, self.means_[k], self.covars_[k]) for k in range(self.n_states)], axis=-1)
-        else:
-            deviations = [coordinates.deviations(padded, self.means_[k]) for k in range(self.n_states)]
-            log_likelihood = np.stack([gaussian_log_density(deviations[k], 0.0, self.covars_[k]) for k in range(self.n_states)], axis=-1)
-        log_scale = log_likelihood.max(axis=-1)
-        # Floor: a frame that no reachable state explains must not zero the forward pass.
-        return np.exp(np.maximum(log_likelihood - log_scale[..., None], -300.0)), log_scale
-
-    def _m_step(self, padded: np.ndarray, gamma: np.ndarray, xi_sum: np.ndarray, lengths: np.ndarray) -> np.ndarray:
-        D = padded.shape[-1]
-        weights = gamma.sum(axis=(0, 1))  # K
-        safe = np.maximum(weights, 1e-12)
-        coordinates = self.coordinates()
-        if not coordinates.rotations:
-            self.means_ = np.einsum("btk,btd->kd", gamma, padded) / safe[:, None]
-            centred = padded[:, :, None, :] - self.means_[None, None]  # B x T x K x D
-        else:
-            points, weights = padded.reshape(-1, D), gamma.reshape(-1, self.n_states)
-            self.means_ = np.array([coordinates.mean(points, weights[:, k], self.means_[k]) for k in range(self.n_states)])
-            centred = np.stack([coordinates.deviations(padded, self.means_[k]) for k in range(self.n_states)], axis=2)
-        self.covars_ = self._constrained(np.einsum("btk,btkd,btke->kde", gamma, centred, centred) / safe[:, None, None])
-        self.covars_ += self.reg_covar * np.eye(D)
-        transmat = xi_sum / np.maximum(xi_sum.sum(axis=1, keepdims=True), 1e-300)
-        starts = gamma[:, 0].sum(axis=0)
-        self.startprob_ = starts / starts.sum()
-        return transmat
-
-    def _set_transitions(self, hmm_transmat: np.ndarray) -> None:
-        transmat = hmm_transmat * (1 - np.eye(self.n_states))
-        totals = transmat.sum(axis=1, keepdims=True)
-        self.transmat_ = np.divide(transmat, totals, out=np.zeros_like(transmat), where=totals > 1e-8)
-
-    def _fit_durations(self, gamma: np.ndarray, lengths: np.ndarray) -> None:
-        """Duration mean and std (s) from the runs of the most likely state in each demo."""
-        runs: list[list[int]] = [[] for _ in range(self.n_states)]
-        for b, length in enumerate(lengths):
-            labels = gamma[b, :length].argmax(axis=1)
-            boundaries = np.flatnonzero(np.diff(labels)) + 1
-            for segment in np.split(labels, boundaries):
-                runs[segment[0]].append(len(segment))
-        all_runs = [run for state_runs in runs for run in state_runs]
-        means, stds = np.empty(self.n_states), np.empty(self.n_states)
-        for k, state_runs in enumerate(runs):
-            sample = np.array(state_runs or [np.mean(all_runs)], dtype=float)
-            means[k] = sample.mean()
-            stds[k] = np.sqrt(max(sample.var(), 1.0))  # variance floor of one step squared
-            if not state_runs:
-                logger.warning("state %d is never the most likely one in the demonstrations", k)
-        self.duration_means_ = means * self.sample_period_
-        self.duration_stds_ = stds * self.sample_period_
-
-    def _fit_end(self, ends: np.ndarray) -> None:
-        """The Gaussian of the demonstrations' end points (`B x D`), attached to the final
-        state of the nominal path as an offset from its mean, so that moving that state's
-        mean moves the end with it."""
-        self.end_state_ = self.nominal_path()[-1]
-        coordinates = self.coordinates()
-        if not coordinates.rotations:
-            self.end_offsets_ = ends.mean(axis=0) - self.means_[self.end_state_]
-            spread = np.atleast_2d(np.cov(ends.T, bias=True)) if len(ends) > 1 else np.zeros((ends.shape[1],) * 2)
-        else:
-            end = coordinates.mean(ends, np.ones(len(ends)), ends[0])
-            self.end_offsets_ = coordinates.deviations(end, self.means_[self.end_state_])
-            deviations = coordinates.deviations(ends, end)
-            spread = deviations.T @ deviations / len(ends)
-        self.end_covars_ = self._constrained(spread) + self.reg_covar * np.eye(ends.shape[1])
 
     def end_target(self) -> tuple[int, np.ndarray, np.ndarray] | None:
         """(final state, `D` end mean, `D x D` end covariance), or None for a model without
@@ -459,36 +324,3 @@ class HSMM:
         final = transmat.sum(axis=1) == 0
         transmat[np.arange(self.n_states), np.arange(self.n_states)] = np.where(final, 1.0, stay)
         return transmat
-
-
-def gaussian_log_density(points: np.ndarray, mean: np.ndarray, covariance: np.ndarray) -> np.ndarray:
-    """Log density of the normal distribution (`D` mean, `D x D` covariance, possibly singular)
-    at `... x D` points: an array of shape `...`, -inf off the support of a singular one.
-
-    The arithmetic of scipy's `multivariate_normal(mean, covariance, allow_singular=True)
-    .logpdf`, step for step (a test checks that the values are bit-identical), without importing
-    `scipy.stats`, which costs every command that learns about 0.8 s more than `scipy.linalg`.
-    """
-    from scipy.linalg import eigh
-
-    eigenvalues, eigenvectors = eigh(covariance, lower=True, check_finite=True)
-    negligible = 1e6 * np.finfo(float).eps * np.max(np.abs(eigenvalues))
-    if np.min(eigenvalues) < -negligible:
-        raise ModelError("a state's covariance is not positive semidefinite")
-    kept = eigenvalues[eigenvalues > negligible]
-    inverse = np.array([0 if abs(value) <= negligible else 1 / value for value in eigenvalues], dtype=float)
-    whitening = np.multiply(eigenvectors, np.sqrt(inverse))
-    rank, log_determinant = np.int64(len(kept)), np.sum(np.log(kept))
-    deviation = np.asarray(points, dtype=float) - mean
-    distance = np.sum(np.square(deviation @ whitening), axis=-1)
-    density = -0.5 * (rank * np.log(2 * np.pi) + log_determinant + distance)
-    if rank < len(eigenvalues):
-        residual = np.linalg.norm(deviation @ eigenvectors[:, eigenvalues <= negligible], axis=-1)
-        density[~(residual < 1e3 * negligible)] = -np.inf
-    return density
-
-
-def _pad(sequences: list[np.ndarray]) -> np.ndarray:
-    """`B x T_max x D` array, sequences padded with their last sample."""
-    longest = max(len(sequence) for sequence in sequences)
-    return np.stack([np.concatenate([s, np.repeat(s[-1:], longest - len(s), axis=0)]) for s in sequences])

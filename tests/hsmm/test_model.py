@@ -8,7 +8,7 @@ import pytest
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm import HSMM, load_model, lqt, retrieve, save_model
 from stl_lfd.hsmm._forward import duration_pmf, state_occupancy
-from stl_lfd.hsmm.model import gaussian_log_density
+from stl_lfd.hsmm.em import gaussian_log_density
 from stl_lfd.hsmm.retrieval import hermite_interpolation
 
 PERIOD = 0.01
