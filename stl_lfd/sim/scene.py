@@ -250,15 +250,16 @@ class Scene:
     @property
     def recorded_signals(self) -> tuple[str, ...]:
         """What a rollout in this scene records: `RECORDED_SIGNALS`, each frame's position, each
-        frame's tilt, then the speed, held flag and orientation of each frame that moves with a
-        movable object (`moving_frames`), then the depth and offset of each frame that goes into
-        a hole."""
+        frame's tilt, then the speed and held flag of each frame that moves with a movable object
+        (`moving_frames`), the depth and offset of each frame that goes into a hole, and last the
+        orientation of each frame that moves with a movable object."""
         return (
             RECORDED_SIGNALS
             + tuple(signal for frame in self.frames for signal in frame.signals)
             + tuple(frame.tilt_signal for frame in self.frames)
-            + tuple(signal for frame in self.moving_frames for signal in frame.motion_signals + frame.orientation_signals)
+            + tuple(signal for frame in self.moving_frames for signal in frame.motion_signals)
             + tuple(signal for frame in self.frames if frame.into for signal in frame.hole_signals)
+            + tuple(signal for frame in self.moving_frames for signal in frame.orientation_signals)
         )
 
     def carried_object(self, frame: SceneFrame) -> SceneObject | None:
