@@ -49,7 +49,7 @@ def check_recorded(signals: SignalTable, reference: Reference, scene: Scene, rat
     _check_positions(signals, scene)
     _check_force(signals, scene)
     _check_ranges(signals, scene)
-    _check_quaternions(signals)
+    _check_quaternions(signals, scene)
 
 
 def _row(signals: SignalTable, index: int) -> str:
@@ -137,11 +137,16 @@ def _check_ranges(signals: SignalTable, scene: Scene) -> None:
             raise ImplausibleSignals(f"{_row(signals, index)}: {name} = {values[index]:.4g}, but {what} lies in [{low:g}, {high:g}]")
 
 
-def _check_quaternions(signals: SignalTable) -> None:
-    if not set(QUATERNION_COLUMNS) <= set(signals.columns):
-        return
-    norms = np.linalg.norm(np.column_stack([signals.columns[name] for name in QUATERNION_COLUMNS]), axis=1)
-    off = np.abs(norms - 1.0) > UNIT_TOLERANCE
-    if off.any():
-        index = int(np.argmax(off))
-        raise ImplausibleSignals(f"{_row(signals, index)}: the orientation qx, qy, qz, qw has norm {norms[index]:.4g}; a rotation's quaternion has norm 1")
+def _check_quaternions(signals: SignalTable, scene: Scene) -> None:
+    """Every orientation the signals hold (the hand's `qx..qw`, a carried object's
+    `NAME_qx..NAME_qw`) is a unit quaternion."""
+    groups = [("", "the orientation")] + [(f"{frame.name}_", f"{frame.name}'s orientation") for frame in scene.moving_frames]
+    for prefix, what in groups:
+        names = [prefix + name for name in QUATERNION_COLUMNS]
+        if not set(names) <= set(signals.columns):
+            continue
+        norms = np.linalg.norm(np.column_stack([signals.columns[name] for name in names]), axis=1)
+        off = np.abs(norms - 1.0) > UNIT_TOLERANCE
+        if off.any():
+            index = int(np.argmax(off))
+            raise ImplausibleSignals(f"{_row(signals, index)}: {what} {', '.join(names)} has norm {norms[index]:.4g}; a rotation's quaternion has norm 1")

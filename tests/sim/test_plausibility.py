@@ -76,3 +76,7 @@ def test_the_objects_signals_are_checked_too():
         check_recorded(recording(**fine | {"shaft_held": np.full(221, 3.0)}), REFERENCE, scene, 10)
     with pytest.raises(ImplausibleSignals, match=r"rec.csv:2: holder_tilt = 2, but holder's tilt \(rad\) lies in \[0, 1.5708\]"):
         check_recorded(recording(**fine | {"holder_tilt": np.full(221, 2.0)}), REFERENCE, scene, 10)
+    unit = {f"shaft_{name}": value for name, value in zip(("qx", "qy", "qz", "qw"), (np.zeros(221), np.zeros(221), np.zeros(221), np.ones(221)))}
+    check_recorded(recording(**fine | unit), REFERENCE, scene, 10)
+    with pytest.raises(ImplausibleSignals, match=r"rec.csv:2: shaft's orientation shaft_qx, shaft_qy, shaft_qz, shaft_qw has norm 2; a rotation's"):
+        check_recorded(recording(**fine | unit | {"shaft_qw": np.full(221, 2.0)}), REFERENCE, scene, 10)
