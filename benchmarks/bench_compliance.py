@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import tempfile
 import warnings
 from pathlib import Path
@@ -22,6 +21,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
+from benchmarks._records import commit
 from benchmarks.bench_phi3 import insertion_and_pick
 from stl_lfd.optim import load_task
 from stl_lfd.optim.objective import objective_for, task_models
@@ -64,7 +64,6 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--engines", default="pybullet,mujoco")
     args = parser.parse_args(argv)
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
     table = Table(title="The compliant Panda: tracking, free motion, the unoptimised phi3 insertion", title_justify="left")
     for column in ("engine", "task", "tracking RMS / max", "force max", "insertion peak", "target"):
         table.add_column(column)
@@ -72,7 +71,7 @@ def main(argv: list[str] | None = None) -> None:
         rows = [row for engine in args.engines.split(",") for row in measure(engine, Path(folder))]
     with RESULTS.open("a") as results:
         for row in rows:
-            results.write(json.dumps({"commit": commit} | row) + "\n")
+            results.write(json.dumps({"commit": commit()} | row) + "\n")
     for row in rows:
         if "tracking_rms_mm" in row:
             verdict = "ok" if row["tracking_rms_mm"] < 5 and row["force_max_n"] < 1 else "MISSED"

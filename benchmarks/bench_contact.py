@@ -18,8 +18,6 @@ About 1-2 s per rollout on one core: 17 rollouts a run, 60 runs by default.
 from __future__ import annotations
 
 import argparse
-import json
-import subprocess
 import tempfile
 import time
 import warnings
@@ -27,21 +25,13 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+from benchmarks._records import commit, recorded_results, seed_list
 from benchmarks.physical import flung, holder_pose, shaft_end
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "contact.jsonl"
 TASKS = ("phi3", "phi3_reorient", "phi3_reorient_one")
 CLASSES = ("thrown", "inserted", "other", "failed")
-
-
-def seed_list(text: str) -> list[int]:
-    """`0-9`, `3`, or `0-4,7` as a list of seeds."""
-    seeds = []
-    for part in text.split(","):
-        first, _, last = part.partition("-")
-        seeds.extend(range(int(first), int(last or first) + 1))
-    return seeds
 
 
 def one_run(job: tuple[str, str, int, int, str]) -> dict[str, Any]:
@@ -87,13 +77,6 @@ def one_run(job: tuple[str, str, int, int, str]) -> dict[str, Any]:
         "ends": "".join(end[0].upper() for end in ends),  # per trial from the unoptimised one: T, I, O, F
         "wall_seconds": round(time.perf_counter() - start, 1),
     }
-
-
-def commit() -> str:
-    try:
-        return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def print_totals(results: list[dict[str, Any]], title: str) -> None:
@@ -159,20 +142,10 @@ def main(argv: list[str] | None = None) -> None:
         for method in args.methods.split(",")
         for seed in seed_list(args.seeds)
     ]
-    if args.jobs > 1:
-        from stl_lfd.optim.runs.sweep import local_map
-
-        finished = (result for _, result in local_map(one_run, jobs, args.jobs))
-    else:
-        finished = (one_run(job) for job in jobs)
     stamp = {"commit": commit(), "backend": args.backend, "robot": args.robot or args.backend}
     results, start = [], time.perf_counter()
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    for result in finished:
-        line = stamp | result
+    for line in recorded_results(one_run, jobs, args.jobs, args.out, stamp):
         results.append(line)
-        with open(args.out, "a") as stream:
-            stream.write(json.dumps(line) + "\n")
         print(f"{line['task']} {line['method']} seed {line['seed']}: {line['ends']} ({line['wall_seconds']:.0f} s)", flush=True)
     results.sort(key=lambda line: jobs.index((line["task"], line["method"], line["seed"], args.trials, args.backend)))
     print_totals(results, f"Where the shaft ends ({stamp['robot']}, {args.trials} trials + the unoptimised one, {time.perf_counter() - start:.0f} s)")

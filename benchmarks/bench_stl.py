@@ -81,6 +81,19 @@ UNTIL_FORMULAS = (
 UNTIL_RATIO_TARGET = 20
 
 
+def paired_seconds(text: str, signals: dict[str, np.ndarray], times: np.ndarray, repeats: int = 9, numbers: tuple[int, int] = (20, 1)) -> tuple[float, float]:
+    """Seconds of the classic and of the new robustness of `text` on one trace, timed in turns."""
+    classic, new = (compile_spec(parse(text), semantics) for semantics in ("classic", "new"))
+    return paired_median_seconds(lambda: classic(signals, times), lambda: new(signals, times), repeats=repeats, numbers=numbers)
+
+
+def ratio_row(case: str, text: str, signals: dict[str, np.ndarray], times: np.ndarray, note: str = "") -> Row:
+    """A row of the new robustness's time on one trace, its target UNTIL_RATIO_TARGET times the classic's."""
+    classic_seconds, new_seconds = paired_seconds(text, signals, times)
+    note += f"classic {format_seconds(classic_seconds)}, new/classic {new_seconds / classic_seconds:.0f}x"
+    return Row(case, f"{times.size:,} samples", new_seconds, UNTIL_RATIO_TARGET * classic_seconds, note)
+
+
 def until_rows() -> list[Row]:
     """Until under the new robustness against the classic one, on the same 22 s trace at 100 Hz,
     both timed in this run: the time column is the new robustness, the target 20x the classic."""
@@ -89,12 +102,7 @@ def until_rows() -> list[Row]:
     table = read_signal_csv(ROOT / "examples" / "three_regions.csv")
     times = np.arange(2200) / 100
     signals = {name: np.interp(times, table.times, values) for name, values in table.columns.items()}
-    rows = []
-    for text in UNTIL_FORMULAS:
-        classic, new = (compile_spec(parse(text), semantics) for semantics in ("classic", "new"))
-        classic_seconds, new_seconds = paired_median_seconds(lambda: classic(signals, times), lambda: new(signals, times), numbers=(20, 1))
-        note = f"classic {format_seconds(classic_seconds)}, new/classic {new_seconds / classic_seconds:.0f}x"
-        rows.append(Row(f"{text}, new", "2,200 samples", new_seconds, UNTIL_RATIO_TARGET * classic_seconds, note))
+    rows = [ratio_row(f"{text}, new", text, signals, times) for text in UNTIL_FORMULAS]
     return rows
 
 
@@ -141,15 +149,8 @@ def random_trace_rows() -> list[Row]:
     """The new robustness against the classic one on every trace of the family and every
     formula, both timed in this run (paired): per formula shape, the worst ratio; and the
     largest difference from the reference implementation on each trace's first samples."""
-    from stl_lfd.stl import reference
-
-    rows = []
     signals, times = oscillating_trace()
-    for text in OSCILLATING_FORMULAS:
-        classic, new = (compile_spec(parse(text), semantics) for semantics in ("classic", "new"))
-        classic_seconds, new_seconds = paired_median_seconds(lambda: classic(signals, times), lambda: new(signals, times), numbers=(20, 1))
-        note = f"oscillating trace; classic {format_seconds(classic_seconds)}, new/classic {new_seconds / classic_seconds:.0f}x"
-        rows.append(Row(f"until: {text}", "2,200 samples", new_seconds, UNTIL_RATIO_TARGET * classic_seconds, note))
+    rows = [ratio_row(f"until: {text}", text, signals, times, "oscillating trace; ") for text in OSCILLATING_FORMULAS]
     for family, templates in (("until", RANDOM_UNTILS), ("windows", RANDOM_WINDOWS)):
         for template in templates:
             worst, worst_case, disagreement = 0.0, None, 0.0
@@ -157,23 +158,28 @@ def random_trace_rows() -> list[Row]:
                 for seed in range(RANDOM_TRACES):
                     signals, times = random_trace(kind, seed)
                     text = random_formula(template, signals, seed)
-                    classic, new = (compile_spec(parse(text), semantics) for semantics in ("classic", "new"))
-                    classic_seconds, new_seconds = paired_median_seconds(
-                        lambda: classic(signals, times), lambda: new(signals, times), repeats=3, numbers=(10, 1)
-                    )
+                    classic_seconds, new_seconds = paired_seconds(text, signals, times, repeats=3, numbers=(10, 1))
                     if new_seconds / classic_seconds > worst:
                         worst, worst_case = new_seconds / classic_seconds, (kind, seed, classic_seconds, new_seconds)
-                    prefix = {name: values[:REFERENCE_SAMPLES] for name, values in signals.items()}
-                    short = times[:REFERENCE_SAMPLES]
-                    expected = reference.new(parse(text).formula, prefix, short, 0, 1.0)
-                    with warnings.catch_warnings():  # the prefix is shorter than the formula's windows: clipped, as the reference clips them
-                        warnings.simplefilter("ignore", HorizonWarning)
-                        actual = compile_spec(parse(text), "new")(prefix, short)
-                    disagreement = max(disagreement, abs(actual - expected) / max(1.0, abs(expected)))
+                    disagreement = max(disagreement, reference_difference(text, signals, times))
             kind, seed, classic_seconds, new_seconds = worst_case
             note = f"worst of {2 * RANDOM_TRACES} traces: {kind} seed {seed}, new/classic {worst:.0f}x; reference within {disagreement:.0e}"
             rows.append(Row(f"{family}: {template.format(a='a', b='b')}", "2,200 samples", new_seconds, UNTIL_RATIO_TARGET * classic_seconds, note))
     return rows
+
+
+def reference_difference(text: str, signals: dict[str, np.ndarray], times: np.ndarray) -> float:
+    """The new robustness's relative difference from the reference implementation's, on the
+    trace's first REFERENCE_SAMPLES samples (the reference evaluates one sample at a time)."""
+    from stl_lfd.stl import reference
+
+    spec = parse(text)
+    prefix, short = {name: values[:REFERENCE_SAMPLES] for name, values in signals.items()}, times[:REFERENCE_SAMPLES]
+    expected = reference.new(spec.formula, prefix, short, 0, 1.0)
+    with warnings.catch_warnings():  # the prefix is shorter than the formula's windows: clipped, as the reference clips them
+        warnings.simplefilter("ignore", HorizonWarning)
+        actual = compile_spec(spec, "new")(prefix, short)
+    return abs(actual - expected) / max(1.0, abs(expected))
 
 
 def conjunction_text(count: int) -> str:

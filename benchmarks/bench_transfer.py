@@ -17,14 +17,13 @@ minute per free-space run and two per contact run on one core.
 from __future__ import annotations
 
 import argparse
-import json
 import tempfile
 import time
 import warnings
 from pathlib import Path
 from typing import Any
 
-from benchmarks.bench_contact import commit, seed_list
+from benchmarks._records import commit, recorded_results, seed_list
 from benchmarks.physical import flung, holder_pose, shaft_end
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -104,19 +103,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=RESULTS, help="the JSON-lines file the results are appended to")
     args = parser.parse_args(argv)
     jobs = [(task, *direction.split(":"), seed) for task in args.tasks.split(",") for direction in args.directions.split(",") for seed in seed_list(args.seeds)]
-    if args.jobs > 1:
-        from stl_lfd.optim.runs.sweep import local_map
-
-        finished = (result for _, result in local_map(one_transfer, jobs, args.jobs))
-    else:
-        finished = (one_transfer(job) for job in jobs)
-    stamp, results, start = {"commit": commit()}, [], time.perf_counter()
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    for result in finished:
-        line = stamp | result
+    results, start = [], time.perf_counter()
+    for line in recorded_results(one_transfer, jobs, args.jobs, args.out, {"commit": commit()}):
         results.append(line)
-        with open(args.out, "a") as stream:
-            stream.write(json.dumps(line) + "\n")
         print(
             f"{line['task']} {line['source']} -> {line['target']} seed {line['seed']}: "
             f"{line['source_robustness']} -> {line['target_robustness']} ({line['wall_seconds']:.0f} s)",

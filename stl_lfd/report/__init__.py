@@ -33,14 +33,13 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
             raise ConfigError(f"--gp-parameter {unknown[0]} is not a parameter of the run ({', '.join(run.space.names)})")
     out.mkdir(parents=True, exist_ok=True)
     options = ReportOptions(tuple(others), tuple(gp_parameters) if gp_parameters else None)
-    made = [(figure.name, figure.draw(run, options) if figure.applies(run, options) else None) for figure in figures.FIGURES]
     written = []
-    for name, figure in made:
-        if figure is None:
-            (out / f"{name}.png").unlink(missing_ok=True)  # an earlier report's, no longer true
+    for spec in figures.FIGURES:
+        path = out / f"{spec.name}.png"
+        if not spec.applies(run, options):
+            path.unlink(missing_ok=True)  # an earlier report's, no longer true
             continue
-        path = out / f"{name}.png"
         with atomic_output(path) as temporary:
-            figure.savefig(temporary, dpi=100)
-        written.append((name, path))
+            spec.draw(run, options).savefig(temporary, dpi=100)
+        written.append((spec.name, path))
     return write_index(run, written, out), [path for _, path in written]

@@ -123,10 +123,8 @@ def _carried_pose(signals: SignalTable, name: str) -> tuple[InHand, InHand] | No
     local_turns = rotations.continuous(rotations.multiply(rotations.conjugate(hand_turns), object_turns))
     later = slice(len(held) // 2, None)
     carried = InHand(np.median(local_positions[later], axis=0), rotations.weighted_mean(local_turns[later]))
-    # what a rigid grasp carries: the object as it lay before the hand came, in the hand as it closed
-    lying = np.array([0])
-    at_grasp = InHand(
-        rotations.rotate(rotations.conjugate(hand_turns[0]), read(f"{name}_", "xyz", lying)[0] - hand_positions[0]),
-        rotations.multiply(rotations.conjugate(hand_turns[0]), read(f"{name}_", QUATERNION_COLUMNS, lying)[0]),
-    )
+    # what a rigid grasp carries: the object as it lay before the hand came (the first sample), in the hand as it closed
+    lying_position, lying_turn = read(f"{name}_", "xyz", np.array([0]))[0], read(f"{name}_", QUATERNION_COLUMNS, np.array([0]))[0]
+    into_hand = rotations.conjugate(hand_turns[0])
+    at_grasp = InHand(rotations.rotate(into_hand, lying_position - hand_positions[0]), rotations.multiply(into_hand, lying_turn))
     return carried, at_grasp

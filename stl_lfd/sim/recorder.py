@@ -52,9 +52,10 @@ class Steps:
 
 
 def signal_columns(steps: Steps, scene: Scene, times: np.ndarray) -> dict[str, np.ndarray]:
-    """The recorded signals at `times` (within `steps.times`), interpolated linearly between
-    steps (`times` that are `steps.times` itself are taken as they are); orientations are
-    renormalised after interpolation, so they must be continuous (no sign flips) in `steps`."""
+    """The recorded signals at `times` (within `steps.times`), in the order of
+    `Scene.recorded_signals`, interpolated linearly between steps (`times` that are
+    `steps.times` itself are taken as they are); orientations are renormalised after
+    interpolation, so they must be continuous (no sign flips) in `steps`."""
 
     def at(values: np.ndarray) -> np.ndarray:
         if times is steps.times:
@@ -76,14 +77,14 @@ def signal_columns(steps: Steps, scene: Scene, times: np.ndarray) -> dict[str, n
     for index, frame in enumerate(scene.frames):
         columns.update(zip(frame.signals, at(steps.frame_positions[:, index]).T))
     tilts = rotations.uprightness(steps.frame_orientations) if scene.frames else np.zeros((len(steps.times), 0))
+    moving = {frame.name for frame in scene.moving_frames}
     for index, frame in enumerate(scene.frames):
         columns[frame.tilt_signal] = np.interp(times, steps.times, tilts[:, index])
+        if frame.name in moving:
+            turns = at(rotations.continuous(steps.frame_orientations[:, index]))
+            columns.update(zip(frame.orientation_signals, (turns / np.linalg.norm(turns, axis=1, keepdims=True)).T))
     columns.update({name: at(values) for name, values in outcome_columns(steps, scene).items()})
-    index = {frame.name: number for number, frame in enumerate(scene.frames)}
-    for frame in scene.moving_frames:
-        turns = at(rotations.continuous(steps.frame_orientations[:, index[frame.name]]))
-        columns.update(zip(frame.orientation_signals, (turns / np.linalg.norm(turns, axis=1, keepdims=True)).T))
-    return columns
+    return {name: columns[name] for name in scene.recorded_signals}  # in the order the scene lists them
 
 
 def outcome_columns(steps: Steps, scene: Scene) -> dict[str, np.ndarray]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Literal
 
 from stl_lfd.choices import SEMANTICS
@@ -27,7 +28,8 @@ class Semantics:
         if not (math.isfinite(self.nu) and self.nu > 0):
             raise SpecError(f"nu must be a positive number (got {self.nu})")
 
-    @property
+    @cached_property
     def kernels(self) -> Kernels:
-        """What a conjunction, a window and an until are under this semantics."""
+        """What a conjunction, a window and an until are under this semantics (made once: the
+        evaluators ask for them at every node they evaluate)."""
         return KERNELS[self.name](self.nu)

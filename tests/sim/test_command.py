@@ -234,7 +234,7 @@ def test_ctrl_c_stops_the_executor_with_its_children_and_keeps_the_trials(tmp_pa
         [stlopt, "optimize", str(task.source), "--out", str(tmp_path / "run")],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=environment, preexec_fn=deliverable_sigint,
     )  # fmt: skip
-    wait_for(lambda: (tmp_path / "child.pid").exists())
+    wait_for(lambda: (tmp_path / "child.pid").exists() and (tmp_path / "child.pid").read_text().strip() != "")  # written, not only created
     child = int((tmp_path / "child.pid").read_text())
     _, err = interrupt(process)
     assert process.returncode == -signal.SIGINT, err
@@ -276,7 +276,7 @@ def _hanging_run(tmp_path, learned_model_file, workers=1):
         [stlopt, "optimize", str(task.source), "--out", str(tmp_path / "run"), "--workers", str(workers)],
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=environment,
     )  # fmt: skip
-    wait_for(lambda: (tmp_path / "child.pid").exists())
+    wait_for(lambda: (tmp_path / "child.pid").exists() and (tmp_path / "child.pid").read_text().strip() != "")  # written, not only created
     recorded = json.loads((tmp_path / "run" / "executions" / "trial-0003" / "executor.json").read_text())
     return process, task, recorded["group"], int((tmp_path / "child.pid").read_text())
 
