@@ -9,6 +9,7 @@ silently ignored setting. `read_yaml` remembers where each key of the file is, s
 from __future__ import annotations
 
 import re
+from dataclasses import fields, is_dataclass, replace
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -166,6 +167,38 @@ def vector(value: Any, length: int, path: Path | str, key: str) -> tuple[float, 
     if not isinstance(value, (list, tuple)) or len(value) != length:
         raise ConfigError(f"{path}: '{key}' must be a list of {length} numbers (got {shown(value)})")
     return tuple(number(item, path, f"{key}[{index}]") for index, item in enumerate(value))
+
+
+def settings_from_yaml(defaults: Any, data: Any, path: Path | str, where: str) -> Any:
+    """A copy of the frozen dataclass `defaults` with the fields `data` sets: whole numbers of at
+    least 1 where the default is an int, numbers of at least 0 where it is a float, lists of
+    such numbers for tuples, and nested dataclasses the same way."""
+    item = check_keys(data, [entry.name for entry in fields(defaults)], path, where)
+    values = {}
+    for name, value in item.items():
+        default, key = getattr(defaults, name), _join(where, name)
+        if is_dataclass(default):
+            values[name] = settings_from_yaml(default, value, path, key)
+        elif isinstance(default, tuple):
+            if not isinstance(value, list) or not value:
+                raise ConfigError(f"{path}: '{key}' must be a non-empty list of numbers (got {shown(value)})")
+            values[name] = tuple(number(entry, path, f"{key}[{index}]", minimum=0.0) for index, entry in enumerate(value))
+        elif isinstance(default, int):
+            values[name] = integer(value, path, key, minimum=1)
+        else:
+            values[name] = number(value, path, key, minimum=0.0)
+    return replace(defaults, **values)
+
+
+def settings_to_yaml(settings: Any, defaults: Any) -> dict[str, Any]:
+    """The fields of the frozen dataclass `settings` that differ from `defaults`, as YAML data
+    (`settings_from_yaml` reads them back)."""
+    data = {}
+    for entry in fields(settings):
+        value, default = getattr(settings, entry.name), getattr(defaults, entry.name)
+        if value != default:
+            data[entry.name] = settings_to_yaml(value, default) if is_dataclass(value) else list(value) if isinstance(value, tuple) else value
+    return data
 
 
 def _join(where: str, key: str) -> str:

@@ -111,14 +111,15 @@ def replay(
         stlopt replay three_regions.npz --spec specs/phi1.stl --gui
     """
 
-    from stl_lfd.report.replay import ReplayRequest, replay_skill
+    from stl_lfd.optim.runs.replay import ReplayRequest, resolve_skill
+    from stl_lfd.skill.replay import replay_skill
 
     use_gui = gui or (video is None and bool(os.environ.get("DISPLAY")))
     request = ReplayRequest(source, trial, spec, scene, duration, semantics.value if semantics else None, tuple(place), backend.value if backend else None)
     with user_errors():
         if gui and not os.environ.get("DISPLAY"):
             raise ExecutionError("--gui needs a display and DISPLAY is not set; record a video with --video FILE.mp4 instead")
-        outcome = replay_skill(request, gui=use_gui, video=video, progress=progress_bar)
+        outcome = replay_skill(resolve_skill(request), gui=use_gui, video=video, progress=progress_bar)
     if outcome.video is not None:
         print(f"wrote {outcome.video} ({outcome.frames} frames)", file=sys.stderr)
     if outcome.robustness is not None:

@@ -7,13 +7,13 @@ from __future__ import annotations
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterator, Mapping
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_SEED, MAX_TRIALS, MAX_WORKERS
-from stl_lfd.optim.method_registry import method_class, method_names
+from stl_lfd.optim.method_registry import method_class, method_names, settings_class, tuned_method_names
 from stl_lfd.rotations import ROTATION_COLUMNS
-from stl_lfd.yamlfile import check_keys, integer, number, shown
+from stl_lfd.yamlfile import check_keys, integer, number, settings_from_yaml, settings_to_yaml, shown
 
 SINGLE_SKILL = "skill"  # the name of the one skill of a task without a behaviour
 TRANSITIONS = ("none", "band", "full")
@@ -88,14 +88,19 @@ class Optimizer:
     `plan`, chosen on their plans), then `method` until `trials` (N). `plan` (composite BO on
     the spec's parts with each part's plan as its prior) is the default; `stl` is the same
     without plans; `pi` is the paper's algorithm. `workers` trials run at once, each batch
-    proposed together (methods plan, stl and random)."""
+    proposed together (methods plan, stl and random). `tuning` maps a method's name to its
+    settings (`methods.tuning`); a method not in it keeps its defaults."""
 
     method: str = "plan"
     initial: int = 8
     trials: int = 32
     seed: int = 0
-    xi: float = 0.1
     workers: int = 1
+    tuning: Mapping[str, Any] = field(default_factory=dict)
+
+    def tuning_for(self, method: str) -> Any:
+        """The settings of `method`: those given in `tuning`, or its defaults."""
+        return self.tuning[method] if method in self.tuning else settings_class(method)()
 
     @property
     def initial_choice(self) -> str:
@@ -121,8 +126,6 @@ class Optimizer:
             raise ConfigError(f"'optimizer.trials' ({self.trials}) is above the limit of {MAX_TRIALS} trials")
         if not 0 <= self.seed <= MAX_SEED:
             raise ConfigError(f"'optimizer.seed' must be from 0 to {MAX_SEED} (got {shown(self.seed)})")
-        if not self.xi >= 0:
-            raise ConfigError(f"'optimizer.xi' must be at least 0 (got {self.xi})")
         if not 1 <= self.workers <= MAX_WORKERS:
             raise ConfigError(f"'optimizer.workers' must be from 1 to {MAX_WORKERS} (got {shown(self.workers)})")
         if self.workers > 1 and not method_class(self.method).parallel:
@@ -130,6 +133,13 @@ class Optimizer:
             raise ConfigError(
                 f"method {self.method} proposes one trial at a time; parallel trials ('optimizer.workers' > 1) need method {', '.join(parallel[:-1])} or {parallel[-1]}"
             )
+        for name, settings in self.tuning.items():
+            if name not in tuned_method_names():
+                raise ConfigError(f"'optimizer.{name}': settings are for the methods {', '.join(tuned_method_names())} (got {shown(name)})")
+            if not isinstance(settings, settings_class(name)):
+                raise ConfigError(f"'optimizer.{name}' must be a {settings_class(name).__name__} (got {shown(settings)})")
+        # settings equal to the method's defaults are dropped, so that equal tunings compare equal
+        object.__setattr__(self, "tuning", {name: settings for name, settings in self.tuning.items() if settings != settings_class(name)()})
 
 
 # --- Reading them from a task file's YAML ---
@@ -177,19 +187,47 @@ def parameters_from_yaml(data: Any, path: Path, where: str) -> Parameters:
         return Parameters(means, durations, transitions)
 
 
+OPTIMIZER_KEYS = ("method", "initial", "trials", "seed", "workers")
+
+
 def optimizer_from_yaml(data: Any, path: Path) -> Optimizer:
-    check_keys(data, ("method", "initial", "trials", "seed", "xi", "workers"), path, "optimizer")
+    """The `optimizer` block: the budget, and each method's tuning under the method's name.
+    `xi` beside the budget is the older spelling of `pi: {xi: ...}` (runs recorded before
+    methods had their own settings)."""
+    data = check_keys(_older_spelling(data, path), OPTIMIZER_KEYS + tuned_method_names(), path, "optimizer")
     defaults = Optimizer()
     settings = dict(
         method=choice(data.get("method", defaults.method), method_names(), path, "optimizer.method"),
         initial=integer(data.get("initial", defaults.initial), path, "optimizer.initial", minimum=1),
         trials=integer(data.get("trials", defaults.trials), path, "optimizer.trials", minimum=1),
         seed=integer(data.get("seed", defaults.seed), path, "optimizer.seed", minimum=0, maximum=MAX_SEED),
-        xi=number(data.get("xi", defaults.xi), path, "optimizer.xi", minimum=0.0),
         workers=integer(data.get("workers", defaults.workers), path, "optimizer.workers", minimum=1, maximum=MAX_WORKERS),
     )
+    tuning = {name: settings_from_yaml(settings_class(name)(), data[name], path, f"optimizer.{name}") for name in tuned_method_names() if name in data}
     with located(path):
-        return Optimizer(**settings)
+        return Optimizer(**settings, tuning=tuning)
+
+
+def recorded_optimizer(data: dict[str, Any], path: Path) -> dict[str, Any]:
+    """A run's recorded `optimizer` block as `Task.to_yaml_dict` writes it today: an older
+    `xi` moved under `pi`, and each method's settings reduced to those off their defaults."""
+    data = dict(_older_spelling(data, path))
+    for name in tuned_method_names():
+        if name in data:
+            defaults = settings_class(name)()
+            changed = settings_to_yaml(settings_from_yaml(defaults, data.pop(name), path, f"optimizer.{name}"), defaults)
+            data |= {name: changed} if changed else {}
+    return data
+
+
+def _older_spelling(data: Any, path: Path) -> Any:
+    """`optimizer.xi` moved into `optimizer.pi.xi`."""
+    if not isinstance(data, dict) or "xi" not in data or not isinstance(data.get("pi", {}), dict):
+        return data
+    if "xi" in data.get("pi", {}):
+        raise ConfigError(f"{path}: 'optimizer.xi' and 'optimizer.pi.xi' both set PI's margin; keep 'optimizer.pi.xi'")
+    rest = {key: value for key, value in data.items() if key != "xi"}
+    return rest | {"pi": data.get("pi", {}) | {"xi": data["xi"]}}
 
 
 def components_from_yaml(value: Any, path: Path, key: str, allow_all: bool) -> tuple[int, ...] | str:

@@ -14,12 +14,12 @@ from typing import Any
 from stl_lfd.choices import SEMANTICS
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_PLACEMENTS, MAX_STATES, samples_problem
-from stl_lfd.optim.settings import SINGLE_SKILL, Optimizer, Parameters, choice, located, optimizer_from_yaml, parameters_from_yaml
+from stl_lfd.optim.settings import OPTIMIZER_KEYS, SINGLE_SKILL, Optimizer, Parameters, choice, located, optimizer_from_yaml, parameters_from_yaml
 from stl_lfd.poses import Pose
 from stl_lfd.sim.executor import DEFAULT_TIMEOUT, Command
 from stl_lfd.sim.registry import DEFAULT_BACKEND, backend_class, backend_names
 from stl_lfd.sim.scene_file import scene_reference
-from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
+from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, settings_to_yaml, shown
 
 
 @dataclass(frozen=True)
@@ -81,13 +81,13 @@ class Task:
         blocks = {name: _parameters_to_yaml(parameters) for name, parameters in self.parameters.items()}
         data["parameters"] = blocks[SINGLE_SKILL] if self.behaviour is None else blocks
         opt = self.optimizer
-        data["optimizer"] = {"method": opt.method, "initial": opt.initial, "trials": opt.trials, "seed": opt.seed, "xi": opt.xi}
+        data["optimizer"] = {"method": opt.method, "initial": opt.initial, "trials": opt.trials, "seed": opt.seed}
         if opt.workers > 1:  # absent for one worker, so that the record of older runs still matches
             data["optimizer"]["workers"] = opt.workers
+        for method, settings in opt.tuning.items():  # only what differs from the defaults, as for workers
+            if changed := settings_to_yaml(settings, type(settings)()):
+                data["optimizer"][method] = changed
         return data
-
-
-OPTIMIZER_KEYS = ("seed", "initial", "trials", "method", "workers")  # fields of `Optimizer`; the others are fields of `Task`
 
 
 def _option(spelling: str) -> Any:

@@ -4,7 +4,8 @@
 The executions are the unoptimised skill's and the finished trials': each trial's reference is
 rebuilt from its point (the plan is a pure function of the point) and its positions are read
 from the run directory, so that a resumed run fits the same models and proposes the same points.
-The latest model is kept in `tracking.json` for the report and the API.
+The latest model is kept in `tracking.json` for the report and the API, with how well it and
+the plan predicted each execution it was fitted on, and the best of them as paths over time.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ TRACKING_FILE = "tracking.json"
 # taken as the execution: predictions would change nothing a spec can tell, at the cost of
 # planning every candidate again after each trial.
 FOLLOWS_THE_PLAN = 0.001
+PATH_SAMPLES = 500  # the best execution's paths in tracking.json, at most this many samples (a figure's resolution)
 
 
 class RunTracking:
@@ -63,7 +65,7 @@ class RunTracking:
             model = TrackingModel().fit(executions, plan_within=FOLLOWS_THE_PLAN) if numbers else TrackingModel()
             grasp = GraspModel().fit_poses([self._carried[number] for number in numbers])
             self._latest = (numbers, model, grasp)
-            self._write(numbers, model, grasp)
+            self._write(numbers, model, grasp, history)
         return self._latest
 
     def plan_score(self, history: Sequence[Trial]) -> tuple[tuple[int, ...] | None, Callable[[np.ndarray], np.ndarray] | None]:
@@ -84,10 +86,52 @@ class RunTracking:
             self._carried[number] = carried_poses(signals, self.objective.scene) if signals is not None else {}
         return self._executions[number]
 
-    def _write(self, numbers: tuple[int, ...], model: TrackingModel, grasp: GraspModel) -> None:
-        if self.folder is not None:
-            record = {"trials": list(numbers), "used": used(model, grasp), **model.to_dict(), "grasp": grasp.to_dict()}
-            write_atomically(self.folder / TRACKING_FILE, json.dumps(record, indent=2) + "\n")
+    def _write(self, numbers: tuple[int, ...], model: TrackingModel, grasp: GraspModel, history: Sequence[Trial]) -> None:
+        if self.folder is None:
+            return
+        paths = {number: predicted_paths(self._executions[number], model) for number in numbers}
+        errors = {str(number): {"plan": _rms(path.planned - path.executed), "model": _rms(path.predicted - path.executed)} for number, path in paths.items()}
+        record = {"trials": list(numbers), "used": used(model, grasp), **model.to_dict(), "grasp": grasp.to_dict(), "errors": errors}
+        robustness = {trial.trial: trial.robustness for trial in history if trial.trial in paths}
+        if robustness:
+            best = max(robustness, key=robustness.get)
+            record["best"] = {"trial": best, **paths[best].thinned(PATH_SAMPLES).to_dict()}
+        write_atomically(self.folder / TRACKING_FILE, json.dumps(record, indent=2) + "\n")
+
+
+@dataclass(frozen=True)
+class PredictedPaths:
+    """One execution against its predictions: `T` sample times and `T x 3` positions, executed,
+    planned (the reference at those times) and predicted by a tracking model."""
+
+    times: np.ndarray
+    executed: np.ndarray
+    planned: np.ndarray
+    predicted: np.ndarray
+
+    def thinned(self, samples: int) -> "PredictedPaths":
+        """Every k-th sample, k the smallest that leaves at most `samples` (the last one kept)."""
+        step = max(1, -(-len(self.times) // samples))
+        keep = np.unique(np.append(np.arange(0, len(self.times), step), len(self.times) - 1))
+        return PredictedPaths(self.times[keep], self.executed[keep], self.planned[keep], self.predicted[keep])
+
+    def to_dict(self) -> dict[str, list]:
+        return {name: np.round(getattr(self, name), 7).tolist() for name in ("times", "executed", "planned", "predicted")}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, list]) -> "PredictedPaths":
+        return cls(*(np.asarray(data[name], dtype=float) for name in ("times", "executed", "planned", "predicted")))
+
+
+def predicted_paths(execution: Execution, model: TrackingModel) -> PredictedPaths:
+    """`execution` against its plan and `model`'s prediction of it."""
+    planned = np.column_stack([np.interp(execution.times, execution.reference_times, axis) for axis in execution.reference_positions.T])
+    predicted = model.predict(execution.reference_times, execution.reference_positions, execution.times)
+    return PredictedPaths(execution.times, execution.positions, planned, predicted)
+
+
+def _rms(difference: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(difference**2)))
 
 
 def used(model: TrackingModel, grasp: GraspModel | None = None) -> bool:
@@ -108,12 +152,16 @@ def execution_of(objective: SkillObjective, models: dict[str, HSMM], signals: Si
 class RunTrackingRecord:
     """What `tracking.json` holds: the trials (0: the unoptimised skill) the models were fitted
     on, the tracking model, whether method plan scored its plans through them, and the grasp
-    model (empty in runs recorded before objects' orientations were)."""
+    model (empty in runs recorded before objects' orientations were); `errors`, trial -> the
+    RMS error (m) of the plan and of the model as predictions of its execution, and `best`, the
+    best of those trials and its `PredictedPaths` (both absent from older runs' records)."""
 
     trials: list[int]
     model: TrackingModel
     used: bool
     grasp: GraspModel = field(default_factory=GraspModel)
+    errors: dict[int, tuple[float, float]] = field(default_factory=dict)
+    best: tuple[int, PredictedPaths] | None = None
 
 
 def read_tracking(folder: Path) -> RunTrackingRecord | None:
@@ -124,6 +172,8 @@ def read_tracking(folder: Path) -> RunTrackingRecord | None:
     try:
         data = json.loads(path.read_text())
         model, grasp = TrackingModel.from_dict(data), GraspModel.from_dict(data.get("grasp", {}))
-        return RunTrackingRecord([int(number) for number in data["trials"]], model, bool(data.get("used", used(model, grasp))), grasp)
+        errors = {int(number): (float(error["plan"]), float(error["model"])) for number, error in data.get("errors", {}).items()}
+        best = (int(data["best"]["trial"]), PredictedPaths.from_dict(data["best"])) if "best" in data else None
+        return RunTrackingRecord([int(number) for number in data["trials"]], model, bool(data.get("used", used(model, grasp))), grasp, errors, best)
     except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
         raise RunError(f"{path}: damaged ({getattr(error, 'msg', error)}); delete it and the next trial writes it anew") from None

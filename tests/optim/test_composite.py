@@ -159,7 +159,8 @@ def _two_bumps(narrow_center: np.ndarray):
 
 def test_starts_near_an_anchor_find_a_narrow_maximum_that_random_starts_miss():
     from stl_lfd.optim.methods.gp import maximise_acquisition
-    from stl_lfd.optim.methods.stl import CompositeSettings, anchored_starts
+    from stl_lfd.optim.methods.stl import anchored_starts
+    from stl_lfd.optim.methods.tuning import CompositeSettings
 
     settings = CompositeSettings()
     dimensions = 12

@@ -1,6 +1,8 @@
 """The search methods' registry: a new method is one class and one registry line, and the loop,
 task files and `Optimizer` take it by name."""
 
+from dataclasses import dataclass
+
 import numpy as np
 import pytest
 
@@ -8,6 +10,7 @@ from stl_lfd.errors import ConfigError
 from stl_lfd.optim import methods
 from stl_lfd.optim.loop import run_remaining_trials, search_method
 from stl_lfd.optim.methods.base import Problem, Request, SearchMethod
+from stl_lfd.optim.methods.tuning import PlanSettings, ProbabilityOfImprovementSettings
 from stl_lfd.optim.settings import Optimizer
 from stl_lfd.optim.trials import Outcome
 
@@ -47,3 +50,43 @@ def test_an_unknown_method_and_parallel_trials_of_a_sequential_one_are_refused()
 def test_every_registered_method_is_a_search_method_of_its_name():
     for name in methods.method_names():
         assert issubclass(methods.method_class(name), SearchMethod) and methods.method_class(name).name == name
+
+
+@dataclass(frozen=True)
+class CornerSettings:
+    start: int = 0  # which corner comes first
+
+
+class TunedCorners(Corners):
+    name = "tuned_corners"
+
+    def __init__(self, problem, optimizer) -> None:
+        super().__init__(problem, optimizer)
+        self.settings = optimizer.tuning_for(self.name)
+
+    def propose(self, request: Request) -> list[tuple[np.ndarray, str]]:
+        shifted = Request(request.history, request.pending, request.first + self.settings.start, request.count, request.seed)
+        return super().propose(shifted)
+
+
+def test_a_method_takes_its_settings_from_the_optimizer(monkeypatch):
+    monkeypatch.setitem(methods.REGISTRY, "tuned_corners", TunedCorners)
+    monkeypatch.setitem(methods.SETTINGS, "tuned_corners", CornerSettings)
+    first = [
+        search_method(Optimizer("tuned_corners", initial=1, trials=5, tuning=tuning), Problem(BOUNDS)).propose(Request([], np.empty((0, 2)), 0, 1, 0))[0][0]
+        for tuning in ({}, {"tuned_corners": CornerSettings(start=3)})
+    ]
+    assert first[0].tolist() == [0.0, -1.0] and first[1].tolist() == [1.0, 1.0]
+    with pytest.raises(ConfigError, match="'optimizer.tuned_corners' must be a CornerSettings"):
+        Optimizer("tuned_corners", tuning={"tuned_corners": PlanSettings()})
+    with pytest.raises(ConfigError, match="settings are for the methods"):
+        Optimizer("plan", tuning={"random": PlanSettings()})
+
+
+def test_pi_reads_its_margin_from_its_settings():
+    problem = Problem(BOUNDS)
+    default = search_method(Optimizer("pi"), problem)
+    tuned = search_method(Optimizer("pi", tuning={"pi": ProbabilityOfImprovementSettings(xi=0.5, restarts=2)}), problem)
+    assert default.settings.xi == 0.1 and (tuned.settings.xi, tuned.settings.restarts) == (0.5, 2)
+    with pytest.raises(ConfigError, match="'pi.xi' must be at least 0"):
+        ProbabilityOfImprovementSettings(xi=-1.0)

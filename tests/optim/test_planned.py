@@ -7,9 +7,9 @@ import pytest
 
 from stl_lfd.optim import finish_run, load_task, resume_run, start_run
 from stl_lfd.optim.loop import run_remaining_trials, search_method
-from stl_lfd.optim.methods.base import Problem, Request
-from stl_lfd.optim.methods.plan import PlanSettings
+from stl_lfd.optim.methods.base import Planner, Problem, Request
 from stl_lfd.optim.methods.planning import Plan
+from stl_lfd.optim.methods.tuning import PlanSettings
 from stl_lfd.optim.objective import spec_composition
 from stl_lfd.optim.settings import Optimizer
 from stl_lfd.optim.trials import Outcome, best_trial
@@ -45,7 +45,7 @@ def objective(parts):
 
 
 def method(optimizer):
-    return search_method(optimizer, Problem(BOUNDS, spec_composition(PARTS), plan=batched(planned_parts)))
+    return search_method(optimizer, Problem(BOUNDS, spec_composition(PARTS), planner=Planner(batched(planned_parts))))
 
 
 def run(parts, optimizer, history=()):
@@ -134,7 +134,7 @@ def test_parallel_trials_spread_out_and_resume_exactly_in_the_middle_of_a_batch(
 def test_a_run_with_method_plan_scores_the_plan_on_the_kinematic_backend_and_resumes(tmp_path, learned_model_file):
     task = load_task(small_task(tmp_path, learned_model_file)).with_overrides(method="plan", initial=1, trials=4)
     whole = start_run(task, tmp_path / "whole")
-    plan = Plan(whole.problem().plan, whole.space.bounds)
+    plan = Plan(whole.problem().planner.plan, whole.space.bounds)
     x = (whole.space.bounds[0] + whole.space.bounds[1]) / 2
     planned = plan(np.full((1, whole.space.dimension), 0.5))[0]
     executed = whole.objective(x)

@@ -149,3 +149,18 @@ def test_staging_folders_of_killed_runs_are_removed_by_the_next_run(tmp_path):
     remove_abandoned(tmp_path / "run")
     held.release()
     assert not abandoned.exists() and building.exists() and fresh.exists() and users.exists()
+
+
+def test_a_run_recorded_with_the_older_spelling_of_pis_margin_resumes(tmp_path, learned_model_file):
+    task = small_task(tmp_path, learned_model_file)
+    out = ["--backend", "kinematic", "--out", str(tmp_path / "run")]
+    assert runner.invoke(app, ["optimize", str(task), "-N", "2", "-M", "1", *out]).exit_code == 0
+    inputs = tmp_path / "run" / "inputs.json"
+    recorded = json.loads(inputs.read_text())
+    recorded["task"]["optimizer"]["xi"] = 0.1  # as runs recorded it before methods had their own settings
+    inputs.write_text(json.dumps(recorded))
+    assert runner.invoke(app, ["optimize", str(task), "-N", "3", "-M", "1", *out, "--resume"]).exit_code == 0
+    recorded["task"]["optimizer"]["xi"] = 0.3
+    inputs.write_text(json.dumps(recorded))
+    refused = runner.invoke(app, ["optimize", str(task), "-N", "4", "-M", "1", *out, "--resume"])
+    assert refused.exit_code == 9 and "'optimizer.pi' is absent here, {'xi': 0.3} in the run's" in refused.stderr

@@ -35,6 +35,15 @@ GOOD_PARAMETERS = "parameters:\n  means: {components: [2]}\n"
         ("paramters: {}\n", "unknown key 'paramters'"),
         (GOOD_PARAMETERS + "optimizer: {initial: 10, trials: 5}\n", r"'optimizer.initial' \(10\) exceeds 'optimizer.trials' \(5\)"),
         (GOOD_PARAMETERS + "optimizer: {method: ucb}\n", "'optimizer.method' must be one of stl, plan, pi, logei, random"),
+        (GOOD_PARAMETERS + "optimizer: {pi: {xii: 1}}\n", "unknown key 'optimizer.pi.xii'"),
+        (
+            GOOD_PARAMETERS + "optimizer: {random: {seed: 1}}\n",
+            r"unknown key 'optimizer.random' \(known: method, initial, trials, seed, workers, stl, plan, pi, logei\)",
+        ),
+        (GOOD_PARAMETERS + "optimizer: {pi: {xi: -1}}\n", "'optimizer.pi.xi' must be at least 0"),
+        (GOOD_PARAMETERS + "optimizer: {pi: {restarts: 0.5}}\n", "'optimizer.pi.restarts' must be an integer"),
+        (GOOD_PARAMETERS + "optimizer: {plan: {rounds: {spreads: []}}}\n", "'optimizer.plan.rounds.spreads' must be a non-empty list"),
+        (GOOD_PARAMETERS + "optimizer: {xi: 0.2, pi: {xi: 0.3}}\n", "'optimizer.xi' and 'optimizer.pi.xi' both set"),
         (GOOD_PARAMETERS + "semantics: fuzzy\n", "'semantics' must be one of classic, new"),
         (GOOD_PARAMETERS + "nu: -1\n", "'nu' must be positive"),
         ("parameters:\n  means: {components: [2], beta: 0}\n", "'parameters.means.beta' must be positive"),
@@ -80,6 +89,28 @@ def test_the_task_as_used_reads_back_the_same(tmp_path):
     again.write_text(yaml.safe_dump(task.to_yaml_dict()))
     reread = load_task(again)
     assert reread.parameters == task.parameters and reread.optimizer == task.optimizer and reread.spec == task.spec.resolve()
+
+
+def test_each_method_is_tuned_under_its_name_and_the_tuning_reads_back(tmp_path):
+    import yaml
+
+    body = GOOD_PARAMETERS + "optimizer:\n  method: pi\n  pi: {xi: 0.3, restarts: 4}\n  stl: {region: {initial: 0.5}}\n  plan: {rounds: {spreads: [0.1]}}\n"
+    optimizer = load_task(write_task(tmp_path, body)).optimizer
+    assert (optimizer.tuning_for("pi").xi, optimizer.tuning_for("pi").restarts, optimizer.tuning_for("pi").raw_samples) == (0.3, 4, 256)
+    assert optimizer.tuning_for("stl").region.initial == 0.5 and optimizer.tuning_for("stl").region.maximum == 1.6
+    assert optimizer.tuning_for("plan").rounds.spreads == (0.1,) and optimizer.tuning_for("plan").rounds.centres == 3
+    assert optimizer.tuning_for("logei").restarts == 8
+    written = load_task(write_task(tmp_path, body)).to_yaml_dict()["optimizer"]
+    assert written["pi"] == {"xi": 0.3, "restarts": 4} and written["stl"] == {"region": {"initial": 0.5}}
+    again = tmp_path / "again.yaml"
+    again.write_text(yaml.safe_dump(load_task(write_task(tmp_path, body)).to_yaml_dict()))
+    assert load_task(again).optimizer == optimizer
+
+
+def test_the_older_spelling_of_pis_margin_is_read_as_its_setting(tmp_path):
+    older = load_task(write_task(tmp_path, GOOD_PARAMETERS + "optimizer: {method: pi, xi: 0.2}\n")).optimizer
+    assert older.tuning_for("pi").xi == 0.2
+    assert load_task(write_task(tmp_path, GOOD_PARAMETERS + "optimizer: {xi: 0.1}\n")).optimizer.tuning == {}
 
 
 def test_behaviour_tasks_take_parameters_per_skill(learned_model):

@@ -52,19 +52,29 @@ def trial_points(folder):
 
 
 @pytest.mark.slow
-def test_a_sagging_robot_is_learned_and_a_resumed_run_proposes_the_same(tmp_path, learned_model_file, sagging):
+def test_a_sagging_robot_is_learned_and_a_resumed_run_proposes_the_same(tmp_path, learned_model_file, sagging, monkeypatch):
     whole = tmp_path / "whole"
     finish_run(start_run(plan_task(tmp_path, learned_model_file, 4), whole))
     record = read_tracking(whole)
     trials, model = record.trials, record.model
-    assert trials == [0, 1, 2, 3]  # the unoptimised skill and the trials before the last proposal
+    assert trials == [0, 1, 2, 3, 4]  # the unoptimised skill and every trial: the record is refitted when the run ends
     assert model.kind_ in ("offset", "filter", "clocked filter")
     assert model.offsets_[2] == pytest.approx(-SAG, abs=1e-3)
     assert np.all(model.heldout_rms_ < 0.2 * model.plan_rms_)
     assert record.used
 
+    assert set(record.errors) == {0, 1, 2, 3, 4} and all(model_error < plan_error for plan_error, model_error in record.errors.values())
+    robustness = {json.loads(line)["trial"]: json.loads(line)["robustness"] for line in (whole / "trials.jsonl").read_text().splitlines()}
+    best, paths = record.best
+    assert best == max(robustness, key=robustness.get) and len(paths.times) <= 501 and paths.executed.shape == paths.predicted.shape == (len(paths.times), 3)
+    assert np.sqrt(np.mean((paths.predicted - paths.executed) ** 2)) < np.sqrt(np.mean((paths.planned - paths.executed) ** 2))
+
     from stl_lfd.report import write_report
 
+    def no_objective(*args, **kwargs):
+        raise AssertionError("the report rebuilt the objective")
+
+    monkeypatch.setattr(objective_module, "objective_for", no_objective)  # the figure reads tracking.json alone
     index, pictures = write_report(whole)
     assert whole / "report" / "tracking.png" in pictures
     assert "Method plan scored its candidates by this prediction" in index.read_text()

@@ -12,11 +12,12 @@
 | `random` | `random.RandomSearch`                    | uniform random points (the baseline)           |
 
 A new method is a `SearchMethod` subclass and one line in `REGISTRY` (`optim/method_registry.py`,
-or `register(name, cls)` from outside the package). Classes are imported on first use: naming
+or `register(name, cls)` from outside the package); its tuning, settable from a task file under
+its name, a frozen dataclass in `tuning.py` and one line in `SETTINGS`. Classes are imported on first use: naming
 the methods, as the command line and the settings' checks do, loads no torch (nor this
 package, which the settings would otherwise import back).
 """
 
-from stl_lfd.optim.method_registry import REGISTRY, method_class, method_names, register
+from stl_lfd.optim.method_registry import REGISTRY, SETTINGS, method_class, method_names, register, settings_class
 
-__all__ = ["REGISTRY", "method_class", "method_names", "register"]
+__all__ = ["REGISTRY", "SETTINGS", "method_class", "method_names", "register", "settings_class"]

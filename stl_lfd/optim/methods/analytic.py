@@ -6,28 +6,11 @@ Torch and BoTorch are imported when a proposal needs them (about 2 s): the M ini
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from stl_lfd.optim.methods.base import Proposal, Request, SobolStart
 from stl_lfd.optim.methods.gp import fit_gp, maximise_acquisition, single_threaded
-
-
-@dataclass(frozen=True)
-class AnalyticSettings:
-    """Tuning of the acquisition's maximisation.
-
-    Attributes:
-        restarts, raw_samples: L-BFGS-B starts, chosen among raw random samples.
-        iterations: L-BFGS-B iterations per restart (BoTorch's default is 200).
-    """
-
-    restarts: int = 8
-    raw_samples: int = 256
-    # BoTorch's 200 iterations spent 2-3 s per PI proposal on phi2-shaped problems (flat log-PI,
-    # ~750 evaluations); with 60 the maximum found was within 3.5 % of its PI in half the time.
-    iterations: int = 60
+from stl_lfd.optim.methods.tuning import AnalyticSettings
 
 
 class AnalyticSearch(SobolStart):
@@ -35,9 +18,9 @@ class AnalyticSearch(SobolStart):
 
     parallel = False
 
-    def __init__(self, problem, optimizer, settings: AnalyticSettings = AnalyticSettings()) -> None:
+    def __init__(self, problem, optimizer, settings: AnalyticSettings | None = None) -> None:
         super().__init__(problem, optimizer)
-        self.settings = settings
+        self.settings = settings or optimizer.tuning_for(self.name)
 
     def acquisition(self, model, Y: np.ndarray):
         raise NotImplementedError
@@ -54,16 +37,15 @@ class AnalyticSearch(SobolStart):
 
 
 class ProbabilityOfImprovement(AnalyticSearch):
-    """Method `pi`, as in the paper: PI(x) = P(f(x) >= max(Y) + xi std(Y)). `xi` (the task
-    file's `optimizer.xi`) is PI's margin in standard deviations of the observed robustness:
-    without it PI saturates and over-exploits."""
+    """Method `pi`, as in the paper: PI(x) = P(f(x) >= max(Y) + xi std(Y)), with `xi` from its
+    settings (`tuning.ProbabilityOfImprovementSettings`, the task file's `optimizer.pi.xi`)."""
 
     name = "pi"
 
     def acquisition(self, model, Y: np.ndarray):
         from botorch.acquisition.analytic import LogProbabilityOfImprovement
 
-        return LogProbabilityOfImprovement(model, best_f=float(np.max(Y)) + self.optimizer.xi * float(np.std(Y)))
+        return LogProbabilityOfImprovement(model, best_f=float(np.max(Y)) + self.settings.xi * float(np.std(Y)))
 
 
 class LogExpectedImprovementSearch(AnalyticSearch):

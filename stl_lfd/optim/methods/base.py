@@ -49,6 +49,28 @@ class Composition:
 
 
 @dataclass(frozen=True)
+class Planner:
+    """What the skill does at a point, known before executing it: its plan.
+
+    Attributes:
+        plan: the plan's robustness of each part, then route, at `b x d` points (parameter
+            units) -> `b x o` values, planned together; raises when a point has no plan.
+        tracked: history -> (key, plan): `plan` through the tracking model learned from the
+            history's executions, for a robot that does not execute the plan (None: it does);
+            the same key, the same model; `(None, None)` while the plan itself will do.
+    """
+
+    plan: Callable[[np.ndarray], np.ndarray]
+    tracked: Callable[[Sequence[Trial]], tuple[Hashable | None, Callable[[np.ndarray], np.ndarray] | None]] | None = None
+
+    def as_executed(self, history: Sequence[Trial]) -> tuple[Hashable | None, Callable[[np.ndarray], np.ndarray]]:
+        """The plan as the robot will execute it, learned from `history`, and its key (None:
+        the plan itself)."""
+        key, tracked = self.tracked(history) if self.tracked is not None else (None, None)
+        return (None, self.plan) if key is None else (key, tracked)
+
+
+@dataclass(frozen=True)
 class Problem:
     """What a run searches.
 
@@ -57,21 +79,15 @@ class Problem:
         composition: the spec's parts (None: the robustness alone).
         features: what a GP sees of `b x d` unit-cube points (`features.PathFeatures`, a
             torch tensor -> `b x f`); None: the points themselves.
-        plan: the plan's robustness of each part, then route, at `b x d` points (parameter
-            units) -> `b x o` values, planned together; raises when a point has no plan
-            (method `plan`'s prior).
+        planner: the plan of a point (method `plan`'s prior); None: no plans.
         initial_design: the `M x d` Sobol points, when already computed (saves torch's import).
-        tracked_plan: history -> (key, plan): `plan` through the tracking model learned from the
-            history's executions, for a robot that does not execute the plan (None: it does);
-            the same key, the same model; `(None, None)` while the plan itself will do.
     """
 
     bounds: np.ndarray
     composition: Composition | None = None
     features: Callable | None = None
-    plan: Callable[[np.ndarray], np.ndarray] | None = None
+    planner: Planner | None = None
     initial_design: np.ndarray | None = None
-    tracked_plan: Callable[[Sequence[Trial]], tuple[Hashable | None, Callable[[np.ndarray], np.ndarray] | None]] | None = None
 
     @property
     def dimension(self) -> int:

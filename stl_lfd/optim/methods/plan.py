@@ -22,7 +22,6 @@ difference's GP learns the part from the trials.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Hashable, Sequence
 
 import numpy as np
@@ -33,35 +32,8 @@ from stl_lfd.optim.methods.base import Proposal, Request, SearchMethod, from_uni
 from stl_lfd.optim.methods.composition import compose, through_routes
 from stl_lfd.optim.methods.gp import single_threaded
 from stl_lfd.optim.methods.planning import Plan, Scorer, difference_posterior
+from stl_lfd.optim.methods.tuning import PlanSettings
 from stl_lfd.optim.trials import Trial, part_observations
-
-
-@dataclass(frozen=True)
-class Rounds:
-    """Refinement rounds of the candidate search: the standard deviation (unit cube) of each
-    round's draws, how many of the best candidates are perturbed (after the first trial, the
-    best trial too), and how many draws around each."""
-
-    spreads: tuple[float, ...]
-    centres: int
-    draws: int
-
-
-@dataclass(frozen=True)
-class PlanSettings:
-    """Tuning of method `plan`.
-
-    Attributes:
-        pool: Sobol candidates whose plans are computed once per run.
-        first_rounds: the first trial's search, chosen by the plan alone (once per run).
-        rounds: later trials' search, kept cheap (40 plans): the trials' history carries it on.
-        pending_spread: no point of a batch this close (unit cube, any coordinate) to another.
-    """
-
-    pool: int = 128
-    first_rounds: Rounds = field(default_factory=lambda: Rounds((0.1, 0.04, 0.015, 0.006), 4, 8))
-    rounds: Rounds = field(default_factory=lambda: Rounds((0.08, 0.02), 3, 5))
-    pending_spread: float = 0.05
 
 
 class PlanSearch(SearchMethod):
@@ -72,12 +44,12 @@ class PlanSearch(SearchMethod):
 
     name = "plan"
 
-    def __init__(self, problem, optimizer, settings: PlanSettings = PlanSettings()) -> None:
+    def __init__(self, problem, optimizer, settings: PlanSettings | None = None) -> None:
         super().__init__(problem, optimizer)
-        if problem.plan is None or problem.composition is None:
+        if problem.planner is None or problem.composition is None:
             raise ValueError("method plan needs the spec's parts and the plan of a point")
-        self.settings = settings
-        self.plan = Plan(problem.plan, problem.bounds)
+        self.settings = settings or optimizer.tuning_for(self.name)
+        self.plan = Plan(problem.planner.plan, problem.bounds)
         self._tracked: tuple[Hashable, Plan] | None = None  # the plan through the latest tracking model
 
     def propose(self, request: Request) -> list[Proposal]:
@@ -115,10 +87,8 @@ class PlanSearch(SearchMethod):
 
     def plan_for(self, history: Sequence[Trial]) -> Plan:
         """The plan of a point as the robot will execute it: through the tracking model learned
-        from `history` (`Problem.tracked_plan`), or the plan itself where the robot executes it."""
-        if self.problem.tracked_plan is None:
-            return self.plan
-        key, score = self.problem.tracked_plan(history)
+        from `history` (`Planner.as_executed`), or the plan itself where the robot executes it."""
+        key, score = self.problem.planner.as_executed(history)
         if key is None:  # the robot follows the plan
             return self.plan
         if self._tracked is None or self._tracked[0] != key:

@@ -15,37 +15,16 @@ the M initial trials are handed out without it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from stl_lfd.optim.methods.base import Composition, Proposal, Request, SobolStart, from_unit, sobol_points, to_unit
 from stl_lfd.optim.methods.gp import fit_multi_output_gp, maximise_acquisition, single_threaded
-from stl_lfd.optim.methods.trust_region import TrustRegion, trust_box, trust_region_length
+from stl_lfd.optim.methods.trust_region import trust_box, trust_region_length
+from stl_lfd.optim.methods.tuning import CompositeSettings
 from stl_lfd.optim.trials import Trial, part_observations
 from stl_lfd.stl import Semantics
-
-
-@dataclass(frozen=True)
-class CompositeSettings:
-    """Tuning of method `stl`.
-
-    Attributes:
-        restarts, raw_samples: the acquisition optimiser's starts, chosen among raw samples.
-        around_anchor, anchor_spread: candidate starts drawn around each anchor trial, and
-            their standard deviation in the unit cube (see `anchored_starts`).
-        stall_gain, stall_trials: an improvement below `stall_gain` of the distance to
-            satisfaction is a stall; after `stall_trials` in a row, a space-filling trial.
-        region: the trust region.
-    """
-
-    restarts: int = 4
-    raw_samples: int = 128
-    around_anchor: int = 32
-    anchor_spread: float = 0.1
-    stall_gain: float = 0.1
-    stall_trials: int = 2
-    region: TrustRegion = field(default_factory=TrustRegion)
 
 
 @dataclass(frozen=True)
@@ -84,9 +63,9 @@ class CompositeSearch(SobolStart):
 
     name = "stl"
 
-    def __init__(self, problem, optimizer, settings: CompositeSettings = CompositeSettings()) -> None:
+    def __init__(self, problem, optimizer, settings: CompositeSettings | None = None) -> None:
         super().__init__(problem, optimizer)
-        self.settings = settings
+        self.settings = settings or optimizer.tuning_for(self.name)
 
     def search(self, request: Request, X: np.ndarray, Y: np.ndarray) -> list[Proposal]:
         batch: list[Proposal] = []

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
@@ -15,7 +16,7 @@ from stl_lfd.files import write_atomically
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim.features import path_features
 from stl_lfd.optim.loop import search_method
-from stl_lfd.optim.methods.base import Problem, SearchMethod
+from stl_lfd.optim.methods.base import Planner, Problem, SearchMethod
 from stl_lfd.optim.objective import SkillObjective, objective_for, task_models
 from stl_lfd.optim.runs.directory import RunDirectory, check_new_run_path
 from stl_lfd.optim.runs.resume import check_resume, inputs_record
@@ -24,7 +25,7 @@ from stl_lfd.optim.runs.store import RunStore
 from stl_lfd.optim.space import SearchSpace
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Overrides, Task
-from stl_lfd.optim.tracking import RunTracking
+from stl_lfd.optim.tracking import TRACKING_FILE, RunTracking
 from stl_lfd.optim.trials import Outcome, Trial
 from stl_lfd.signals import SignalTable
 from stl_lfd.stl import ast
@@ -44,15 +45,27 @@ class PreparedRun:
     summary: Summary
     initial_signals: SignalTable | None = None  # when the run started in this process
 
+    @cached_property
+    def tracking(self) -> RunTracking | None:
+        """How the robot follows its references, learned from the run's executions; None where
+        the backend plays the plan back or the run has several object placements."""
+        if self.objective.plays_the_plan or len(self.objective.placed) != 1:
+            return None
+        return RunTracking(self.objective, self.models, self.space, self.run.recorded_signals, self.run.path)
+
     def problem(self, initial_design: np.ndarray | None = None) -> Problem:
         """What the search method searches: the bounds, the spec's parts, what a GP sees of a
         point (`features.path_features`), and the plan of a point (method `plan`'s prior), through
         the robot's tracking model where the backend does not play the plan back."""
         features = path_features(self.space, self.models)
-        tracked_plan = None
-        if not self.objective.plays_the_plan and len(self.objective.placed) == 1:
-            tracked_plan = RunTracking(self.objective, self.models, self.space, self.run.recorded_signals, self.run.path).plan_score
-        return Problem(self.space.bounds, self.objective.composition, features, self.objective.plan_score(), initial_design, tracked_plan)
+        planner = Planner(self.objective.plan_score(), self.tracking.plan_score if self.tracking is not None else None)
+        return Problem(self.space.bounds, self.objective.composition, features, planner, initial_design)
+
+    def refresh_tracking(self, history: list[Trial]) -> None:
+        """Fit a run's tracking model (`tracking.json`) on all of `history`, when the run
+        learned one: its record then covers every trial, the last ones included."""
+        if self.tracking is not None and self.run.path is not None and (self.run.path / TRACKING_FILE).is_file():
+            self.tracking.model(history)
 
     def search_method(self, initial_design: np.ndarray | None = None) -> SearchMethod:
         return search_method(self.task.optimizer, self.problem(initial_design))

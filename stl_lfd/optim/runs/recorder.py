@@ -89,6 +89,7 @@ def finish_run(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], 
         pool.close()
     if len(recorder.history) == len(prepared.history):  # nothing ran (a finished run resumed): nothing changes
         return prepared.summary
+    prepared.refresh_tracking(recorder.history)
     recorder.wall_seconds += time.perf_counter() - mark
     summary = recorder.summary()
     prepared.run.write_summary(summary)

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from stl_lfd.errors import RunError
+from stl_lfd.optim.settings import recorded_optimizer
 from stl_lfd.optim.task import Overrides, Task, placements_to_yaml
 
 if TYPE_CHECKING:
@@ -67,7 +68,8 @@ def check_resume(run_path: Path, recorded: Task, inputs: dict[str, Any] | None, 
             raise RunError(f"{run_path}: {Overrides.option(key)} cannot change on --resume (the run has {old}, got {new}); start a new run with another --out")
     if inputs is None:  # a run recorded before inputs.json existed: options are all we can check
         return
-    difference = _first_difference(_comparable(file_task), inputs["task"])
+    recorded_task = inputs["task"] | {"optimizer": recorded_optimizer(inputs["task"]["optimizer"], run_path)}
+    difference = _first_difference(_comparable(file_task), recorded_task)
     if difference is not None:
         key, ours, theirs = difference
         raise RunError(

@@ -9,6 +9,7 @@ from matplotlib.figure import Figure
 from stl_lfd.report.explain import semantics_in_words
 from stl_lfd.report.figures.base import BEST, INITIAL, FigureSpec, ReportOptions
 from stl_lfd.report.run_data import RunData
+from stl_lfd.report.surrogate import Surrogate
 
 MAX_PANELS = 8  # parts of a spec drawn on panels of their own; beyond, all on one
 # How the spec's value is composed of its parts, as the components figure's legend says it.
@@ -132,30 +133,17 @@ class GpSlices(FigureSpec):
         return len(run.observations()[1]) >= 3 and run.best is not None
 
     def draw(self, run: RunData, options: ReportOptions) -> Figure:
-        X, Y = run.observations()
-        import torch
-
-        from stl_lfd.optim.methods.gp import fit_gp
-
-        bounds = run.space.bounds
-        model = fit_gp(X, Y, bounds)
+        surrogate = Surrogate(run)
         names = list(run.space.names)
-        chosen = list(options.gp_parameters or _most_relevant(model, names, 2))
+        chosen = list(options.gp_parameters or surrogate.most_relevant(2))
         figure = Figure(figsize=(5.5 * len(chosen), 4), layout="constrained")
         axes_list = np.atleast_1d(figure.subplots(1, len(chosen), squeeze=False)[0])
         for axes, name in zip(axes_list, chosen):
-            index = names.index(name)
-            grid = np.linspace(bounds[0, index], bounds[1, index], 200)
-            points = np.repeat(run.best.x[None], grid.size, axis=0)
-            points[:, index] = grid
-            with torch.no_grad():
-                posterior = model.posterior(torch.as_tensor(points, dtype=torch.float64))
-                mean = posterior.mean.numpy().ravel()
-                std = posterior.variance.clamp_min(0).sqrt().numpy().ravel()
-            axes.fill_between(grid, mean - 1.96 * std, mean + 1.96 * std, color="tab:blue", alpha=0.2, label="95 % band")
-            axes.plot(grid, mean, color="tab:blue", label="GP mean")
-            axes.scatter(X[:, index], Y, color="k", s=12, label="trials")
-            axes.axvline(run.best.x[index], color=BEST, lw=1, label="best")
+            cut = surrogate.slice_through(run.best.x, name)
+            axes.fill_between(cut.grid, cut.mean - 1.96 * cut.std, cut.mean + 1.96 * cut.std, color="tab:blue", alpha=0.2, label="95 % band")
+            axes.plot(cut.grid, cut.mean, color="tab:blue", label="GP mean")
+            axes.scatter(surrogate.X[:, names.index(name)], surrogate.Y, color="k", s=12, label="trials")
+            axes.axvline(run.best.x[names.index(name)], color=BEST, lw=1, label="best")
             axes.axhline(0.0, color="k", lw=0.8)
             axes.set(xlabel=name, ylabel="robustness", title=f"through the best point: {name}")
             axes.tick_params(axis="x", labelrotation=30)
@@ -168,14 +156,6 @@ class GpSlices(FigureSpec):
             "its mean, its 95 % band and the trials, projected. It shows what the trials say about these parameters "
             "(methods plan and stl model each part of the spec apart instead)."
         )
-
-
-def _most_relevant(model, names: list[str], count: int) -> list[str]:
-    kernel = getattr(model.covar_module, "base_kernel", model.covar_module)
-    lengthscales = kernel.lengthscale.detach().numpy().ravel() if getattr(kernel, "lengthscale", None) is not None else None
-    if lengthscales is None or lengthscales.size != len(names):
-        return names[:count]
-    return [names[index] for index in np.argsort(lengthscales)[:count]]
 
 
 class Compare(FigureSpec):

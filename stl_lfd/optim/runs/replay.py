@@ -1,0 +1,65 @@
+"""Which skill `stlopt replay` executes: a model file, a behaviour file, or a trial of a run
+directory (which also names the spec, scene, duration, semantics and object placements of the
+run; a run with several placements is replayed at its first, or at the one given)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from stl_lfd.errors import ConfigError, ExecutionError
+from stl_lfd.optim.runs.directory import trial_skill
+from stl_lfd.sim.registry import backend_class
+from stl_lfd.skill.behaviour import load_skill
+from stl_lfd.skill.replay import ReplaySkill, filming_backend
+
+
+@dataclass(frozen=True)
+class ReplayRequest:
+    """What to replay; None fields take the run's settings or the defaults."""
+
+    source: Path
+    trial: str = "best"
+    spec: Path | None = None
+    scene: str | None = None
+    duration: float | None = None
+    semantics: str | None = None
+    place: tuple[str, ...] = ()  # NAME=x,y[,z[,yaw]] texts for the scene's object frames
+    backend: str | None = None  # a backend that films (default: the run's, if it does; else DEFAULT_BACKEND)
+
+
+def resolve_skill(request: ReplayRequest) -> ReplaySkill:
+    """The models and settings named by a replay request."""
+    source = request.source
+    if source.is_dir():
+        run = trial_skill(source, request.trial)
+        task = run.task
+        return ReplaySkill(
+            models=run.models,
+            behaviour=task.behaviour,
+            spec=request.spec or task.spec,
+            scene=request.scene or task.scene,
+            duration=request.duration or task.duration,
+            semantics=request.semantics or task.semantics,
+            nu=task.nu,
+            default_video=source / f"replay-trial-{run.trial}.mp4",
+            placement=request.place or (task.placements[0] if task.placements else ()),
+            backend=filming_backend(request.backend or (task.backend if backend_class(task.backend).capabilities.films else None)),
+        )
+    if not source.exists():
+        raise ConfigError(f"{source}: no such model file, behaviour file or run directory")
+    if request.trial != "best":
+        raise ExecutionError("--trial applies to run directories, not to a model or behaviour file")
+    models, behaviour = load_skill(source)
+    return ReplaySkill(
+        models=models,
+        behaviour=source if behaviour is not None else None,
+        spec=request.spec,
+        scene=request.scene or (behaviour.scene if behaviour is not None else "free_space"),
+        duration=request.duration,
+        semantics=request.semantics or "new",
+        nu=1.0,
+        default_video=Path("replay.mp4"),
+        placement=request.place,
+        backend=filming_backend(request.backend),
+    )
