@@ -27,7 +27,6 @@ import shutil
 import signal
 import subprocess
 import tempfile
-import time
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Iterator
@@ -42,7 +41,7 @@ from stl_lfd.sim.plausibility import check_recorded
 from stl_lfd.sim.reference import Reference, Rollout, write_reference_csv
 from stl_lfd.sim.safety import check_reference
 from stl_lfd.sim.scene import Scene
-from stl_lfd.sim.watchdog import Watchdog, forget_group, record_group, stop_leftover
+from stl_lfd.sim.watchdog import Watchdog, forget_group, group_running, record_group, stop_group, stop_leftover
 
 STOP_GRACE = 3.0  # seconds between SIGTERM and SIGKILL when a command is stopped
 EXECUTIONS_DIR = "executions"
@@ -168,43 +167,9 @@ def run_command(command: Command, values: dict[str, str], folder: Path, kept: bo
 
 def stop_process_group(process: subprocess.Popen) -> None:
     """SIGTERM to the process's group (the command and everything it started), SIGKILL to what
-    is left after `STOP_GRACE` seconds."""
-    _signal_group(process.pid, signal.SIGTERM)
-    deadline = time.monotonic() + STOP_GRACE
-    try:
-        process.wait(timeout=STOP_GRACE)
-    except subprocess.TimeoutExpired:
-        pass
-    while _group_running(process.pid) and time.monotonic() < deadline:  # its children, ending
-        time.sleep(0.02)
-    _signal_group(process.pid, signal.SIGKILL)
+    is left once they have all ended or after `STOP_GRACE` seconds."""
+    stop_group(process.pid, STOP_GRACE, lambda: process.poll() is None or group_running(process.pid))
     process.wait()
-
-
-def _group_running(group: int) -> bool:
-    """Whether a process of the group still runs; a zombie (ended, waiting for its parent or
-    init to reap it) does not."""
-    proc = Path("/proc")
-    if not proc.is_dir():
-        return _signal_group(group, 0)
-    for entry in proc.iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
-            except (OSError, IndexError):
-                continue
-            if int(fields[2]) == group and fields[0] != "Z":
-                return True
-    return False
-
-
-def _signal_group(group: int, number: int) -> bool:
-    """Send signal `number` to the process group; whether it still had a member."""
-    try:
-        os.killpg(group, number)
-    except (ProcessLookupError, PermissionError):
-        return False
-    return True
 
 
 def tracking_error(signals: SignalTable, reference: Reference) -> np.ndarray:

@@ -20,6 +20,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Callable
 
 GROUP_FILE = "executor.json"
 DONE = b"done"
@@ -84,14 +85,44 @@ def stop_leftover(folder: Path, grace: float) -> bool:
     path.unlink(missing_ok=True)
     if started is None or _start_time(group) != started:  # gone, or its number reused by another process
         return False
-    for number in (signal.SIGTERM, signal.SIGKILL):
-        try:
-            os.killpg(group, number)
-        except (ProcessLookupError, PermissionError):
-            return True
-        end = time.monotonic() + grace
-        while number == signal.SIGTERM and time.monotonic() < end and _start_time(group) == started:
-            time.sleep(0.05)
+    stop_group(group, grace, lambda: group_running(group))
+    return True
+
+
+def stop_group(group: int, grace: float, running: Callable[[], bool]) -> None:
+    """SIGTERM to process group `group`, then, after `grace` seconds or as soon as `running()`
+    says it has ended, SIGKILL to whatever is left of it."""
+    if not _signal_group(group, signal.SIGTERM):
+        return
+    deadline = time.monotonic() + grace
+    while running() and time.monotonic() < deadline:
+        time.sleep(0.02)
+    _signal_group(group, signal.SIGKILL)
+
+
+def group_running(group: int) -> bool:
+    """Whether a process of the group still runs; a zombie (ended, waiting for its parent or
+    init to reap it) does not."""
+    proc = Path("/proc")
+    if not proc.is_dir():
+        return _signal_group(group, 0)
+    for entry in proc.iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except (OSError, IndexError):
+                continue
+            if int(fields[2]) == group and fields[0] != "Z":
+                return True
+    return False
+
+
+def _signal_group(group: int, number: int) -> bool:
+    """Send signal `number` to the process group; whether it still had a member."""
+    try:
+        os.killpg(group, number)
+    except (ProcessLookupError, PermissionError):
+        return False
     return True
 
 
