@@ -14,6 +14,7 @@ from rich.console import Console
 from stl_lfd.optim.runs.prepare import PreparedRun
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.trials import Trial
+from stl_lfd.spelling import spelled
 
 
 class TrialPrinter:
@@ -46,7 +47,7 @@ class TrialPrinter:
         self.console.print(f"unoptimised skill: robustness {initial:+.5f} ({_verdict(initial > 0)})")
         plan = optimizer.phases
         if done >= optimizer.trials:
-            self.console.print(plan + f"; the run is complete ({done} trials; raise --iterations to extend it)")
+            self.console.print(plan + f"; the run is complete ({done} trials; raise {spelled('trials')} to extend it)")
             return
         self.console.print(plan + (f"; resuming after trial {done}" if done else ""))
         self.console.print(f"[dim]{'trial':>7} {'phase':>7} {'robustness':>11} {'best':>11} {'satisfied':>9} {'time':>7}[/]")

@@ -131,3 +131,42 @@ def test_robustness_loads_numpy_with_one_blas_thread_unless_the_user_chose(chose
     env = {name: value for name, value in os.environ.items() if name != "OPENBLAS_NUM_THREADS"} | ({"OPENBLAS_NUM_THREADS": chosen} if chosen else {})
     printed = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env).stdout
     assert int(printed) == expected
+
+
+def test_messages_name_options_as_typed_while_a_command_runs_and_settings_otherwise():
+    from stl_lfd.spelling import spelled
+
+    result = runner.invoke(app, ["optimize"])
+    assert result.exit_code == 5 and "or --spec SPEC" in result.stderr
+    assert spelled("spec") == "'spec'" and spelled("trials") == "'trials'"  # the Python API's names again afterwards
+    assert _lower_module_lines() == []
+
+
+def _lower_module_lines() -> list[str]:
+    """Strings (not docstrings) of the modules below the CLI that hold an option's spelling; a
+    whole command suggested to the user (`stlopt replay RUN --trial 3`) is the CLI's text."""
+    import ast
+    import re
+
+    found = []
+    for path in (ROOT / "stl_lfd").rglob("*.py"):
+        if "cli" in path.relative_to(ROOT / "stl_lfd").parts:
+            continue
+        tree = ast.parse(path.read_text())
+        docstrings = {
+            id(node.body[0].value)
+            for node in ast.walk(tree)
+            if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef)) and node.body and isinstance(node.body[0], ast.Expr)
+        }
+        texts = {}  # an f-string as one text, its pieces left out
+        for node in ast.walk(tree):
+            if isinstance(node, ast.JoinedStr):
+                texts[id(node)] = "{}".join(part.value if isinstance(part, ast.Constant) else "" for part in node.values)
+                docstrings |= {id(part) for part in node.values}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docstrings:
+                texts[id(node)] = node.value
+        for text in texts.values():
+            if re.search(r"(^|[\s(])--[a-z]", text) and "stlopt " not in text:
+                found.append(f"{path.name}: {text!r}")
+    return found

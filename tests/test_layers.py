@@ -17,7 +17,7 @@ import pytest
 from tests.conftest import ROOT
 
 PACKAGE = ROOT / "stl_lfd"
-LEAVES = {"allocator", "choices", "dag", "errors", "files", "key_positions", "lazy", "limits", "poses", "rotations", "signals", "yamlfile"}
+LEAVES = {"allocator", "choices", "dag", "errors", "files", "key_positions", "lazy", "limits", "poses", "rotations", "signals", "spelling", "yamlfile"}
 # Higher ranks may import lower ones (and themselves); equal ranks only themselves.
 RANKS = {"leaf": 0, "stl": 1, "hsmm": 1, "sim": 1, "skill": 2, "optim": 3, "report": 4, "progress": 5, "cli": 6, "__init__": 7}
 

@@ -15,8 +15,32 @@ from typer.core import TyperArgument, TyperCommand
 
 from stl_lfd.allocator import keep_freed_memory
 from stl_lfd.errors import OutputError, StlLfdError
+from stl_lfd.spelling import spelled_as
 
 INTERRUPTED = 130  # what a shell reports for a process that SIGINT ended
+# How the command line spells the settings that library messages name (`stl_lfd.spelling`).
+SPELLINGS = {
+    "backend": "--backend",
+    "command": "--command",
+    "compare": "--compare",
+    "demos": "--demos",
+    "frame": "--frame",
+    "gp_parameters": "--gp-parameter",
+    "initial": "--init",
+    "method": "--method",
+    "min_spread": "--min-spread",
+    "model": "--model",
+    "out": "--out",
+    "place": "--place",
+    "placements": "--place",
+    "ray": "--ray",
+    "resume": "--resume",
+    "seed": "--seed",
+    "spec": "--spec",
+    "trial": "--trial",
+    "trials": "--iterations",
+    "workers": "--workers",
+}
 _as_program = False  # run as the `stlopt` program (`main`), not called in-process (tests, the API)
 
 
@@ -91,9 +115,11 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _root(
+    ctx: typer.Context,
     version: bool = typer.Option(False, "--version", callback=_version, is_eager=True, help="Print the version and exit."),
 ) -> None:
     """Adapt demonstrated robot skills to Signal Temporal Logic requirements."""
+    ctx.call_on_close(spelled_as(SPELLINGS))  # messages name options as typed here, for this command only
 
 
 def one_blas_thread() -> None:

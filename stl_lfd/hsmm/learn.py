@@ -15,6 +15,7 @@ from stl_lfd.hsmm.tp import TPHSMM
 from stl_lfd.limits import MAX_STATES, samples_problem
 from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment
 from stl_lfd.signals import SignalTable
+from stl_lfd.spelling import spelled
 
 # Demonstrations are resampled no finer than this (s): hand-guided motions have no content
 # above a few hertz, and EM, state sequences and tracking all cost time per sample.
@@ -142,9 +143,11 @@ def demonstrated_skill(model: HSMM, folder: str | Path) -> HSMM:
     return model.at(poses[0] if poses else {})
 
 
-def frame_poses(model: HSMM, assignments: list[str], source: str | Path, option: str = "--frame") -> dict[str, Pose]:
+def frame_poses(model: HSMM, assignments: list[str], source: str | Path, option: str | None = None) -> dict[str, Pose]:
     """Frame name -> pose from `NAME=x,y,z[,yaw]` texts: every frame of a TP-HSMM but `base`,
-    none for a plain HSMM."""
+    none for a plain HSMM. Errors name `option` (default: the `frame` setting as the user
+    spells it)."""
+    option = option or spelled("frame")
     frames = [name for name in getattr(model, "frame_names_", []) if name != BASE_FRAME]
     poses: dict[str, Pose] = {}
     for text in assignments:

@@ -19,6 +19,7 @@ import numpy as np
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm.orientation import Coordinates
 from stl_lfd.limits import MAX_SPREAD_ANGLE, MAX_SPREAD_DURATION, MAX_SPREAD_POSITION
+from stl_lfd.spelling import spelled
 
 
 @dataclass(frozen=True)
@@ -64,9 +65,11 @@ def widened(covariances: np.ndarray, stds: np.ndarray) -> np.ndarray:
 _UNITS = {"position": {"mm": 0.001, "m": 1.0}, "angle": {"deg": math.pi / 180.0, "rad": 1.0}, "duration": {"%": 0.01}}
 
 
-def parse_min_spread(text: str, option: str = "--min-spread") -> MinimumSpread | None | str:
+def parse_min_spread(text: str, option: str | None = None) -> MinimumSpread | None | str:
     """`auto`, `none`, or `POSITION,ANGLE,DURATION` with units (`5mm,5deg,10%`; also `m`,
-    `rad`) -> what `learn` takes. ModelError naming `option` otherwise."""
+    `rad`) -> what `learn` takes. ModelError naming `option` (default: the `min_spread`
+    setting as the user spells it) otherwise."""
+    option = option or spelled("min_spread")
     cleaned = text.strip().lower()
     if cleaned in ("auto", "none"):
         return None if cleaned == "none" else "auto"

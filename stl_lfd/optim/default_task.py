@@ -20,6 +20,7 @@ from typing import Any, Callable
 from stl_lfd.errors import ConfigError
 from stl_lfd.optim.task import Task, load_task, parse_task
 from stl_lfd.sim.registry import DEFAULT_BACKEND
+from stl_lfd.spelling import spelled
 from stl_lfd.yamlfile import read_yaml
 
 DEFAULTS: dict[str, Any] = {
@@ -59,9 +60,11 @@ def default_task(spec: Path, demos: Path | None = None, model: Path | None = Non
     """The default task (see the module's docstring) for `spec` and the skill in `demos` or
     `model` (exactly one)."""
     if demos is not None and model is not None:
-        raise ConfigError(f"{spec}: give --demos DIR or --model FILE for the default task, not both")
+        raise ConfigError(f"{spec}: give {spelled('demos')} DIR or {spelled('model')} FILE for the default task, not both")
     if demos is None and model is None:
-        raise ConfigError(f"{spec}: no task file in configs/ names this spec; give a task file, or --demos DIR or --model FILE to build a default task")
+        raise ConfigError(
+            f"{spec}: no task file in configs/ names this spec; give a task file, or {spelled('demos')} DIR or {spelled('model')} FILE to build a default task"
+        )
     states, seconds = _skill_size(demos, model)
     spec = Path(spec).resolve()
     data = DEFAULTS | {
@@ -110,10 +113,10 @@ def task_to_run(task_file: Path | None, spec: Path | None, demos: Path | None, m
     `spec` (said through `say`), or a default task for `spec` on `demos` or `model`."""
     if task_file is not None:
         if demos is not None or model is not None:
-            raise ConfigError("--demos and --model build a task without a task file; the task file names its skill")
+            raise ConfigError(f"{spelled('demos')} and {spelled('model')} build a task without a task file; the task file names its skill")
         return load_task(task_file)
     if spec is None:
-        raise ConfigError("give a task file (e.g. configs/phi1.yaml), or --spec SPEC")
+        raise ConfigError(f"give a task file (e.g. configs/phi1.yaml), or {spelled('spec')} SPEC")
     if not Path(spec).is_file():
         raise ConfigError(f"{spec}: no such spec file")
     found = task_file_naming(spec) if demos is None and model is None else None

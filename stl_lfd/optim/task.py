@@ -7,7 +7,7 @@ types and bounds that make no sense are `ConfigError`s naming the file and the k
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +19,7 @@ from stl_lfd.poses import Pose
 from stl_lfd.sim.executor import DEFAULT_TIMEOUT, Command
 from stl_lfd.sim.registry import DEFAULT_BACKEND, backend_class, backend_names
 from stl_lfd.sim.scene_file import scene_reference
+from stl_lfd.spelling import spelled
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, settings_to_yaml, shown
 
 
@@ -54,7 +55,9 @@ class Task:
     def __post_init__(self) -> None:
         needs_command = backend_class(self.backend).capabilities.needs_command
         if needs_command and self.command is None:
-            raise ConfigError(f"{self.source}: the {self.backend} backend needs the command that executes a trial ('command' in the task file, or --command)")
+            raise ConfigError(
+                f"{self.source}: the {self.backend} backend needs the command that executes a trial ('command' in the task file, or {spelled('command')})"
+            )
         if needs_command and len(self.placements) > 1:
             raise ConfigError(f"{self.source}: several placements need a simulated backend (the {self.backend} backend executes one reference per trial)")
 
@@ -90,24 +93,21 @@ class Task:
         return data
 
 
-def _option(spelling: str) -> Any:
-    return field(default=None, metadata={"option": spelling})
-
-
 @dataclass(frozen=True)
 class Overrides:
     """Settings given on top of a task file; None keeps the file's. `trials` (the budget) may
-    change when a run is resumed; the others define the problem and may not."""
+    change when a run is resumed; the others define the problem and may not. Messages name them
+    as the user gave them (`spelling.spelled`: `--init` for `initial` on the command line)."""
 
-    spec: Path | None = _option("--spec")
-    backend: str | None = _option("--backend")
-    command: Command | None = _option("--command")
-    placements: tuple[dict[str, Pose], ...] | None = _option("--place")
-    seed: int | None = _option("--seed")
-    initial: int | None = _option("--init")
-    trials: int | None = _option("--iterations")
-    method: str | None = _option("--method")
-    workers: int | None = _option("--workers")
+    spec: Path | None = None
+    backend: str | None = None
+    command: Command | None = None
+    placements: tuple[dict[str, Pose], ...] | None = None
+    seed: int | None = None
+    initial: int | None = None
+    trials: int | None = None
+    method: str | None = None
+    workers: int | None = None
 
     def given(self) -> dict[str, Any]:
         """The settings given (not None), by name."""
@@ -126,15 +126,8 @@ class Overrides:
         """An optimizer setting's error, naming the options given where the message is about them
         (`--workers 0 must be ...`), and the task file only where it is about the file's keys."""
         for key, value in self.given().items():
-            message = message.replace(f"'optimizer.{key}' ({value})", f"{self.option(key)} {value}").replace(
-                f"'optimizer.{key}'", f"{self.option(key)} {value}"
-            )
+            message = message.replace(f"'optimizer.{key}' ({value})", f"{spelled(key)} {value}").replace(f"'optimizer.{key}'", f"{spelled(key)} {value}")
         return ConfigError(message if "'optimizer." not in message else f"{source}: {message}")
-
-    @staticmethod
-    def option(name: str) -> str:
-        """How the command line spells setting `name` (`--init` for `initial`)."""
-        return next(item.metadata["option"] for item in fields(Overrides) if item.name == name)
 
     @staticmethod
     def setting(task: Task, name: str) -> Any:

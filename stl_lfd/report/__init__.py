@@ -9,6 +9,7 @@ from pathlib import Path
 from stl_lfd.errors import ConfigError
 from stl_lfd.files import atomic_output, check_output_folder
 from stl_lfd.optim.runs.directory import RunDirectory
+from stl_lfd.spelling import spelled
 
 
 def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (), gp_parameters: list[str] | None = None) -> tuple[Path, list[Path]]:
@@ -30,7 +31,7 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
     if gp_parameters:
         unknown = [name for name in gp_parameters if name not in run.space.names]
         if unknown:
-            raise ConfigError(f"--gp-parameter {unknown[0]} is not a parameter of the run ({', '.join(run.space.names)})")
+            raise ConfigError(f"{spelled('gp_parameters')} {unknown[0]} is not a parameter of the run ({', '.join(run.space.names)})")
     out.mkdir(parents=True, exist_ok=True)
     options = ReportOptions(tuple(others), tuple(gp_parameters) if gp_parameters else None)
     written = []

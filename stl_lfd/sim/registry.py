@@ -23,6 +23,7 @@ from importlib import import_module
 from typing import TYPE_CHECKING
 
 from stl_lfd.errors import ConfigError, ExecutionError
+from stl_lfd.spelling import spelled
 
 if TYPE_CHECKING:
     from stl_lfd.sim.backend import Backend, BackendOptions
@@ -47,7 +48,7 @@ REGISTRY: dict[str, Entry] = {
     "pybullet": Entry("stl_lfd.sim.pybullet_panda:PyBulletBackend", "a compliant Panda simulated in PyBullet"),
     "mujoco": Entry("stl_lfd.sim.mujoco_panda:MujocoBackend", "a compliant Panda simulated in MuJoCo"),
     "kinematic": Entry("stl_lfd.sim.kinematic:KinematicBackend", "records the reference itself"),
-    "command": Entry("stl_lfd.sim.command:CommandBackend", "runs an external program (--command)"),
+    "command": Entry("stl_lfd.sim.command:CommandBackend", "runs an external program"),
 }
 DEFAULT_BACKEND = "pybullet"
 
@@ -85,7 +86,7 @@ def new_backend(name: str, options: "BackendOptions | None" = None) -> "Backend"
     options = options or BackendOptions()
     cls = backend_class(name)
     if cls.capabilities.needs_command and options.command is None:
-        raise ConfigError(f"the {name} backend needs a command (--command, or 'command' in the task file)")
+        raise ConfigError(f"the {name} backend needs a command ({spelled('command')}, or 'command' in the task file)")
     if options.gui and not cls.capabilities.has_gui:
         raise ExecutionError(f"the {name} backend has no GUI (choose from {', '.join(gui_backends())}, or record a video)")
     return cls.open(options)

@@ -18,6 +18,7 @@ from stl_lfd.errors import ConfigError
 from stl_lfd.poses import Pose
 from stl_lfd.sim.impedance import PANDA_TORQUE_LIMITS, Impedance, NullspacePosture
 from stl_lfd.sim.safety import Safety
+from stl_lfd.spelling import spelled
 
 SHAPES = ("box", "cylinder", "sphere")
 # m: rolling resistance of an object by default, about that of a metal shaft on a wooden table
@@ -280,9 +281,10 @@ class Scene:
         """The frames that move with a movable object."""
         return tuple(frame for frame in self.frames if self.carried_object(frame) is not None)
 
-    def check_placement(self, placements: Mapping[str, Pose], source: str = "--place") -> None:
-        """ConfigError (naming `source`) for a frame the scene lacks or a position outside the
-        frame's area."""
+    def check_placement(self, placements: Mapping[str, Pose], source: str | None = None) -> None:
+        """ConfigError (naming `source`, by default the `place` setting) for a frame the scene
+        lacks or a position outside the frame's area."""
+        source = source or spelled("place")
         frames = {frame.name: frame for frame in self.frames}
         for name, pose in placements.items():
             if name not in frames:
@@ -314,7 +316,7 @@ class Scene:
             return frame.pose.orientation
         return rotations.from_euler(*objects[frame.objects[0]].orientation)
 
-    def place(self, placements: Mapping[str, Pose], source: str = "--place") -> "Scene":
+    def place(self, placements: Mapping[str, Pose], source: str | None = None) -> "Scene":
         """A copy with frames moved to `placements` (name -> pose), their objects with them;
         checked as `check_placement` does."""
         self.check_placement(placements, source)

@@ -19,11 +19,14 @@ from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment, parse_pose, pose_f
 from stl_lfd.sim.impedance import NULLSPACE_POSTURES, PANDA_TORQUE_LIMITS
 from stl_lfd.sim.safety import Safety
 from stl_lfd.sim.scene import SHAPES, Camera, Control, Scene, SceneFrame, SceneObject, check_area
+from stl_lfd.spelling import spelled
 from stl_lfd.yamlfile import check_keys, number, read_yaml, shown, vector
 
 
-def placement_from_options(scene: Scene, texts: list[str], option: str = "--place") -> dict[str, Pose]:
-    """Frame name -> pose from `NAME=x,y[,z[,yaw]]` texts (z and yaw default to the frame's)."""
+def placement_from_options(scene: Scene, texts: list[str], option: str | None = None) -> dict[str, Pose]:
+    """Frame name -> pose from `NAME=x,y[,z[,yaw]]` texts (z and yaw default to the frame's);
+    errors name `option` (default: the `place` setting as the user spells it)."""
+    option = option or spelled("place")
     placement: dict[str, Pose] = {}
     for text in texts:
         name, pose = parse_assignment(text, option, scene.frame_poses)

@@ -60,7 +60,7 @@ class PlacedSkill:
         return execute(self.reference() if reference is None else reference, self.scene, backend, rate, observer)
 
 
-def placed_scene(scene: str | Scene, placement: Mapping[str, Pose] | Sequence[str] = (), source: str = "--place") -> Scene:
+def placed_scene(scene: str | Scene, placement: Mapping[str, Pose] | Sequence[str] = (), source: str | None = None) -> Scene:
     """`scene` (a name, a scene file or a `Scene`) with its object frames at `placement`: frame
     -> pose, or `--place` texts `NAME=x,y[,z[,yaw]]` (parsed and checked against the scene)."""
     world = load_scene(scene) if not isinstance(scene, Scene) else scene

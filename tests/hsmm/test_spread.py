@@ -44,8 +44,8 @@ def test_the_spread_option_reads_units():
     assert spread == MinimumSpread(pytest.approx(0.002), pytest.approx(math.radians(1.5)), pytest.approx(0.2))
     assert parse_min_spread("0.01m,0.1rad,5%") == MinimumSpread(0.01, 0.1, 0.05)
     for text in ("5mm,3deg", "5,3,10", "5mm,3deg,-10%", "5mm,3deg,nan%", "5cm,3deg,10%"):
-        with pytest.raises(ModelError, match=rf"--min-spread {text}: give auto, none, or a position"):
-            parse_min_spread(text)
+        with pytest.raises(ModelError, match=rf"'min_spread' {text}: give auto, none, or a position"):
+            parse_min_spread(text)  # from Python, the setting's name; `stlopt learn` says --min-spread (test_misuse)
 
 
 def test_learning_from_one_csv_says_it_widened_the_states(tmp_path):

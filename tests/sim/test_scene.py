@@ -93,10 +93,20 @@ def test_placing_a_frame_moves_its_objects_rigidly():
 
 
 def test_placements_outside_the_table_or_of_unknown_frames_are_refused():
+    from stl_lfd.spelling import spelled_as
+
     scene = load_scene("pick_insert")
-    with pytest.raises(ConfigError, match=r"--place: holder at \(0.9, 0.2\) is outside the area it may be placed in \(x 0.3 to 0.7"):
+    with pytest.raises(ConfigError, match=r"'place': holder at \(0.9, 0.2\) is outside the area it may be placed in \(x 0.3 to 0.7"):
         scene.place(placement_from_options(scene, ["holder=0.9,0.2"]))
-    with pytest.raises(ConfigError, match=r"--place cup=0.5,0.2: no frame 'cup' \(frames: shaft, holder\)"):
+    with pytest.raises(ConfigError, match=r"'place' cup=0.5,0.2: no frame 'cup' \(frames: shaft, holder\)"):
+        placement_from_options(scene, ["cup=0.5,0.2"])
+    restore = spelled_as({"place": "--place"})  # as the command line names the setting
+    try:
+        with pytest.raises(ConfigError, match=r"--place cup=0.5,0.2: no frame 'cup'"):
+            placement_from_options(scene, ["cup=0.5,0.2"])
+    finally:
+        restore()
+    with pytest.raises(ConfigError, match=r"'place' cup=0.5,0.2"):
         placement_from_options(scene, ["cup=0.5,0.2"])
     with pytest.raises(ConfigError, match="holder is placed twice"):
         placement_from_options(scene, ["holder=0.5,0.2", "holder=0.5,0.25"])

@@ -38,6 +38,7 @@ from stl_lfd.sim import Reference, UnsafeReference, exchange_folder, read_refere
 from stl_lfd.sim.command import EXECUTIONS_DIR, gate, tracking_error
 from stl_lfd.sim.plausibility import check_recorded
 from stl_lfd.sim.reference import Rollout, warn_if_untracked
+from stl_lfd.spelling import spelled
 
 REFERENCE_FILE = "reference.csv"
 
@@ -101,7 +102,7 @@ def ask(
         if trials is not None and trials != task.optimizer.trials:
             done = len(run.trials())
             if trials < done:
-                raise ConfigError(f"--iterations {trials}: the run {out} has {done} trials already; ask for at least {done}")
+                raise ConfigError(f"{spelled('trials')} {trials}: the run {out} has {done} trials already; ask for at least {done}")
             task = task.with_overrides(trials=trials)
             run.write_task(task)  # the budget `tell` and `report` count with, as --resume -N extends a run
         pending = _live_pending(run)

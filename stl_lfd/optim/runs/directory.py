@@ -46,6 +46,7 @@ from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Task, load_task
 from stl_lfd.optim.trials import Trial, best_trial
 from stl_lfd.signals import SignalTable, read_signal_csv, write_signal_csv
+from stl_lfd.spelling import spelled
 
 TASK_FILE = "task.yaml"
 MODEL_FILE = "model.npz"
@@ -239,9 +240,9 @@ def check_new_run_path(path: Path) -> None:
     """Refuse, before any work, a run path that exists (and is not an empty folder) or cannot
     be created and written."""
     if path.exists() and not path.is_dir():
-        raise RunError(f"{path}: is a file, not a run directory; choose another with --out")
+        raise RunError(f"{path}: is a file, not a run directory; choose another with {spelled('out')}")
     if path.exists() and any(path.iterdir()):
-        raise RunError(f"{path}: the run directory exists; continue it with --resume or choose another with --out")
+        raise RunError(f"{path}: the run directory exists; continue it with {spelled('resume')} or choose another with {spelled('out')}")
     check_output_folder(path, "run directory")
 
 
@@ -271,7 +272,7 @@ def trial_skill(path: Path, which: str = "best") -> TrialSkill:
         best = best_trial(trials)
         number = best.trial if best is not None else 0
         if number == 0:
-            raise RunError(f"{path}: the run has no successful trial yet; replay the unoptimised skill with --trial initial")
+            raise RunError(f"{path}: the run has no successful trial yet; replay the unoptimised skill with {spelled('trial')} initial")
     elif which == "initial":
         number = 0
     else:
@@ -287,7 +288,7 @@ def _trial_number(which: str, finished: int, path: Path) -> int:
     try:
         number = int(which)
     except ValueError:
-        raise ConfigError(f"--trial must be 'best', 'initial' or a trial number (got {which!r})") from None
+        raise ConfigError(f"{spelled('trial')} must be 'best', 'initial' or a trial number (got {which!r})") from None
     if not 1 <= number <= finished:
         have = f"trials 1 to {finished}" if finished else "no finished trials"
         raise RunError(f"{path}: no trial {number} (the run has {have}; 'initial' is the unoptimised skill)")

@@ -12,6 +12,7 @@ from stl_lfd.optim.runs.directory import trial_skill
 from stl_lfd.sim.registry import backend_class
 from stl_lfd.skill.behaviour import load_skill
 from stl_lfd.skill.replay import ReplaySkill, filming_backend
+from stl_lfd.spelling import spelled
 
 
 @dataclass(frozen=True)
@@ -49,7 +50,7 @@ def resolve_skill(request: ReplayRequest) -> ReplaySkill:
     if not source.exists():
         raise ConfigError(f"{source}: no such model file, behaviour file or run directory")
     if request.trial != "best":
-        raise ExecutionError("--trial applies to run directories, not to a model or behaviour file")
+        raise ExecutionError(f"{spelled('trial')} applies to run directories, not to a model or behaviour file")
     models, behaviour = load_skill(source)
     return ReplaySkill(
         models=models,

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 from stl_lfd.errors import RunError
 from stl_lfd.optim.settings import recorded_optimizer
 from stl_lfd.optim.task import Overrides, Task, placements_to_yaml
+from stl_lfd.spelling import spelled
 
 if TYPE_CHECKING:
     from stl_lfd.stl import ast
@@ -65,7 +66,9 @@ def check_resume(run_path: Path, recorded: Task, inputs: dict[str, Any] | None, 
             continue
         old, new = _plain(Overrides.setting(recorded, key)), _plain(value)
         if old != new:
-            raise RunError(f"{run_path}: {Overrides.option(key)} cannot change on --resume (the run has {old}, got {new}); start a new run with another --out")
+            raise RunError(
+                f"{run_path}: {spelled(key)} cannot change on {spelled('resume')} (the run has {old}, got {new}); start a new run with another {spelled('out')}"
+            )
     if inputs is None:  # a run recorded before inputs.json existed: options are all we can check
         return
     recorded_task = inputs["task"] | {"optimizer": recorded_optimizer(inputs["task"]["optimizer"], run_path)}
@@ -79,7 +82,7 @@ def check_resume(run_path: Path, recorded: Task, inputs: dict[str, Any] | None, 
     for name, digest in inputs["fingerprint"].items():
         if now.get(name) != digest:
             where = {"spec": recorded.spec, "behaviour": recorded.behaviour, "scene": recorded.scene}[name]
-            raise RunError(f"{where}: the {name} changed since the run started, so its trials would not compare; start a new run with another --out")
+            raise RunError(f"{where}: the {name} changed since the run started, so its trials would not compare; start a new run with another {spelled('out')}")
 
 
 def _comparable(task: Task) -> dict[str, Any]:

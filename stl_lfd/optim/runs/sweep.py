@@ -24,6 +24,7 @@ from typing import Any, Callable, Iterable, Iterator
 from stl_lfd.errors import ConfigError, RunError
 from stl_lfd.files import write_atomically
 from stl_lfd.optim.runs.sweep_file import Cell, Sweep
+from stl_lfd.spelling import spelled
 
 RUNS_DIR = "runs"
 TABLE_FILE = "sweep.csv"
@@ -110,7 +111,7 @@ def ray_map(function: Callable[[Any], Any], items: Iterable[Any], address: str |
     try:
         import ray
     except ImportError:
-        raise ConfigError("--ray needs Ray: pip install 'stlopt[ray]'") from None
+        raise ConfigError(f"{spelled('ray')} needs Ray: pip install 'stlopt[ray]'") from None
     if not ray.is_initialized():
         ray.init(address=address, runtime_env={"env_vars": {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}}, log_to_driver=False)
     remote = ray.remote(num_cpus=1)(function)

@@ -25,6 +25,7 @@ import numpy as np
 
 from stl_lfd.errors import RunError
 from stl_lfd.optim.trials import Outcome, describe_error
+from stl_lfd.spelling import spelled
 
 _objective = None  # the worker process's own objective, built by `_start`
 _busy = False  # whether the worker is evaluating a trial (a stop then unwinds it first)
@@ -87,7 +88,7 @@ def _died(points: list[tuple[np.ndarray, int]]) -> RunError:
     trials = f"trial {numbers[0]}" if len(numbers) == 1 else f"trials {numbers[0]} to {numbers[-1]}"
     return RunError(
         f"a worker process died (killed, or crashed) while running {trials}; those trials are lost and the run stops here: "
-        "continue it with the same command and --resume"
+        f"continue it with the same command and {spelled('resume')}"
     )
 
 

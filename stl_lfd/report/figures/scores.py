@@ -10,6 +10,7 @@ from stl_lfd.report.explain import semantics_in_words
 from stl_lfd.report.figures.base import BEST, INITIAL, FigureSpec, ReportOptions
 from stl_lfd.report.run_data import RunData
 from stl_lfd.report.surrogate import Surrogate
+from stl_lfd.spelling import spelled
 
 MAX_PANELS = 8  # parts of a spec drawn on panels of their own; beyond, all on one
 # How the spec's value is composed of its parts, as the components figure's legend says it.
@@ -179,4 +180,4 @@ class Compare(FigureSpec):
         return figure
 
     def caption(self, run: RunData) -> str:
-        return "The best robustness so far, trial by trial, of this run and of each run given with --compare (each in its own semantics, named in the legend)."
+        return f"The best robustness so far, trial by trial, of this run and of each run given with {spelled('compare')} (each in its own semantics, named in the legend)."
