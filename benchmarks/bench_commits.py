@@ -1,4 +1,5 @@
-"""The STL robustness on two commits, timed in turns: is a change of the kernels slower?
+"""The STL robustness, skill learning and the command's start on two commits, timed in turns:
+is a refactoring slower?
 
     python -m benchmarks.bench_commits OLD [NEW] [--rounds 5]
 
@@ -8,9 +9,10 @@ round times every workload (the median of several calls, after a warm-up) with t
 the same machine. A workload's time on a commit is its smallest over the rounds (the least
 disturbed one); the table gives both and NEW / OLD. NEW defaults to the working tree.
 
-The workloads are the paper's specs on the 20 s trace of bench_stl, untils, windows and
-nested operators of both semantics on the 22 s three-region trace and on bench_stl's
-oscillating trace: what the optimiser evaluates after every rollout.
+The workloads: the paper's specs, untils, windows and nested operators in both semantics on
+the 22 s three-region trace and on bench_stl's oscillating trace (what the optimiser evaluates
+after every rollout); learning the three-region skill (6 states) and retrieving its reference;
+and `import stl_lfd.cli`, what every `stlopt` command pays first.
 """
 
 from __future__ import annotations
@@ -64,21 +66,39 @@ for case, text in workloads:
                 function(signals, times)
             runs.append((time.perf_counter() - start) / 5)
         result[case + ", " + semantics] = statistics.median(runs)
+from stl_lfd import learn_from_folder, retrieve
+start = time.perf_counter()
+model = learn_from_folder(root + "/demos/three_regions", 6)[0]
+result["learn three_regions, 6 states"] = time.perf_counter() - start
+retrieve(model)
+runs = []
+for _ in range(5):
+    start = time.perf_counter()
+    retrieve(model)
+    runs.append(time.perf_counter() - start)
+result["retrieve its reference"] = statistics.median(runs)
 print(json.dumps(result))
 """
 
 
+STARTUP = "import json, time; start = time.perf_counter(); import stl_lfd.cli; print(json.dumps({'import stl_lfd.cli': time.perf_counter() - start}))"
+
+
 def timings(worktree: Path) -> dict[str, float]:
-    """One round of every workload in a fresh process on `worktree`'s code."""
-    completed = subprocess.run(
-        [sys.executable, "-c", TIMER, str(worktree), json.dumps(WORKLOADS)],
-        cwd=worktree,
-        env={"PYTHONPATH": str(worktree), "PATH": "/usr/bin:/bin", "OMP_NUM_THREADS": "1"},
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    return json.loads(completed.stdout)
+    """One round of every workload in fresh processes on `worktree`'s code."""
+    result = {}
+    for script, arguments in ((TIMER, [str(worktree), json.dumps(WORKLOADS)]), (STARTUP, [])):
+        completed = subprocess.run(
+            [sys.executable, "-c", script, *arguments],
+            cwd=worktree,
+            env={"PYTHONPATH": str(worktree), "PATH": "/usr/bin:/bin", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"},
+            capture_output=True,
+            text=True,
+        )
+        if completed.returncode != 0:
+            raise SystemExit(f"{worktree}: the timing process failed:\n{completed.stderr}")
+        result |= json.loads(completed.stdout)
+    return result
 
 
 def compare(old: str, new: str | None, rounds: int) -> list[Row]:
@@ -111,7 +131,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     arguments = parser.parse_args()
     print_table(
-        f"STL robustness, {arguments.new or 'working tree'} against {arguments.old} (best of {arguments.rounds} rounds each, in turns)",
+        f"{arguments.new or 'working tree'} against {arguments.old} (best of {arguments.rounds} rounds each, in turns)",
         compare(arguments.old, arguments.new, arguments.rounds),
     )
 
