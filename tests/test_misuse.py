@@ -453,7 +453,7 @@ CASES = [
         {"s.yaml": "description: x\nsafety: {workspace: {lower: [0, 0, 0], upper: [1, 1, 1]}}\n"},
     ),
     Case("tell-nothing-pending", ["tell", "{run}", "{csv}"], 9, "no trial is pending; hand out the next one with: stlopt ask"),
-    Case("tell-no-signals", ["tell", "{run}"], 2, "give the signals CSV of the pending trial, or --failed REASON"),
+    Case("tell-no-signals", ["tell", "{run}"], 2, "give the signals CSV of the pending trial, --failed REASON or --abandon"),
     Case("tell-missing-run", ["tell", "{case}/nope", "{csv}"], 9, "no such run directory"),
     Case("ask-run-with-seed", ["ask", "{run}", "--seed", "3"], 5, "a run directory keeps its own settings"),
     Case("ask-not-a-run", ["ask", "{case}"], 9, "not a run directory of stlopt optimize"),
@@ -488,7 +488,7 @@ CASES = [
     Case("ask-iterations-zero", ["ask", "{case}/run", "-N", "0"], 5, "--iterations 0: the run", damage=lambda run: None),
     Case("tell-empty-reason", ["tell", "{case}/run", "--failed", ""], 2, "--failed needs a reason", damage=ask_one_more),
     Case("tell-blank-reason", ["tell", "{case}/run", "--failed", "  "], 2, "--failed needs a reason", damage=ask_one_more),
-    Case("tell-signals-and-failed", ["tell", "{case}/run", "{csv}", "--failed", "x"], 2, "(not both)", damage=ask_one_more),
+    Case("tell-signals-and-failed", ["tell", "{case}/run", "{csv}", "--failed", "x"], 2, "(one of them)", damage=ask_one_more),
     Case("tell-no-arguments", ["tell"], 2, "Missing argument 'RUN_DIR'"),
     Case("tell-csv-missing", ["tell", "{case}/run", "{case}/nope.csv"], 4, "nope.csv", damage=ask_one_more),
     # --- object placements, executors, options -----------------------------------------------

@@ -116,6 +116,8 @@ def ask(
     init: Optional[int] = InitOption,
     seed: Optional[int] = SeedOption,
     method: Optional[MethodOption] = typer.Option(None, help="Optimiser method (default: the task's)."),
+    workers: Optional[int] = typer.Option(None, "--workers", help="Trials handed out at once, to as many robots (a new run only; default: the task's, or 1)."),
+    robot: str = typer.Option("", "--robot", metavar="NAME", help="Who executes the trial: each robot of a fleet holds one trial at a time."),
 ) -> None:
     """Hand out the next trial to execute elsewhere: write its reference CSV, print its path.
 
@@ -126,18 +128,22 @@ def ask(
     nothing is printed on stdout. The same seed gives the same trials as 'stlopt optimize'.
     References outside the scene's safety limits are recorded as failed trials, never handed out.
 
+    A fleet: with --workers N (or the task's optimizer.workers), N robots each ask with their
+    --robot name and hold a trial at once; the trials are those of 'stlopt optimize --workers N'.
+
     Examples (then execute the printed reference and 'stlopt tell' its signals):
 
     \b
         stlopt ask configs/phi1.yaml --out runs/robot
         stlopt ask runs/robot
+        stlopt ask runs/lab --robot left
     """
     from stl_lfd.optim import Overrides, load_task
     from stl_lfd.optim.runs.asktell import ask as ask_trial
     from stl_lfd.optim.runs.asktell import ask_new
     from stl_lfd.optim.runs.resume import inputs_record
 
-    given = Overrides(spec=spec, seed=seed, initial=init, trials=iterations, method=method.value if method else None)
+    given = Overrides(spec=spec, seed=seed, initial=init, trials=iterations, method=method.value if method else None, workers=workers)
 
     def refused(trial) -> None:
         print(f"trial {trial.trial} refused: {trial.error}", file=sys.stderr)
@@ -146,12 +152,12 @@ def ask(
         if target.is_dir():
             if out is not None or set(given.given()) - {"trials"}:
                 raise ConfigError(f"{target}: a run directory keeps its own settings; only --iterations may be given with it")
-            run_dir, asked = target, ask_trial(target, iterations, on_refused=refused)
+            run_dir, asked = target, ask_trial(target, iterations, on_refused=refused, robot=robot)
         else:
             file_task = load_task(target)
             run_dir = out or Path("runs") / file_task.name
             if run_dir.is_dir() and any(run_dir.iterdir()):
-                asked = ask_trial(run_dir, iterations, file_task, given, on_refused=refused)
+                asked = ask_trial(run_dir, iterations, file_task, given, on_refused=refused, robot=robot)
             else:
                 task = given.applied_to(file_task)
                 asked = ask_new(task, run_dir, inputs_record(file_task, given, task), lambda message: print(message, file=sys.stderr))
@@ -160,8 +166,8 @@ def ask(
         return
     print(asked.reference)
     what = "the unoptimised skill" if asked.trial == 0 else "an initial trial, chosen on its plan" if asked.phase == "design" else f"chosen by {asked.phase}"
-    state = "still pending" if asked.again else "to execute"
-    print(f"trial {asked.trial} ({what}) {state}; then: stlopt tell {shlex.quote(str(run_dir))} SIGNALS.csv", file=sys.stderr)
+    state = ("still pending" if asked.again else "to execute") + (f" on robot {robot}" if robot else "")
+    print(f"trial {asked.trial} ({what}) {state}; then: stlopt tell {shlex.quote(str(run_dir))} SIGNALS.csv --trial {asked.trial}", file=sys.stderr)
 
 
 @app.command(cls=PlainUsage)
@@ -170,24 +176,34 @@ def tell(
     run_dir: Path = typer.Argument(..., metavar="RUN_DIR", help="The run directory that 'stlopt ask' handed the trial out of."),
     signals: Optional[Path] = typer.Argument(None, metavar="SIGNALS_CSV", help="The signals recorded while executing the pending trial."),
     failed: Optional[str] = typer.Option(None, "--failed", help="Record the pending trial as failed, with this reason, instead of signals."),
+    abandon: bool = typer.Option(False, "--abandon", help="Record the pending trial as failed: it will never be told (a robot gone)."),
+    trial: Optional[int] = typer.Option(
+        None, "--trial", min=0, metavar="N", help="Which pending trial (default: the one whose folder holds the signals, or the only one)."
+    ),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object (trial, robustness, satisfied, best) instead of the number."),
 ) -> None:
-    """Record the signals of the trial 'stlopt ask' handed out, and print its robustness.
+    """Record the signals of a trial 'stlopt ask' handed out, and print its robustness.
+
+    Trials handed out to a fleet may be told in any order: one told before those handed out
+    ahead of it is recorded as soon as they are.
 
     Examples:
 
     \b
         stlopt tell runs/robot signals.csv
         stlopt tell runs/robot --failed "protective stop at t=4 s"
+        stlopt tell runs/lab --trial 7 --abandon
     """
+    from stl_lfd.optim.runs.asktell import ABANDONED
     from stl_lfd.optim.runs.asktell import tell as tell_trial
+    from stl_lfd.optim.runs.pending import handed_out
 
-    if (signals is None) == (failed is None):  # mistakes in the command line itself: usage, exit 2
-        context.fail("give the signals CSV of the pending trial, or --failed REASON (not both)")
+    if sum([signals is not None, failed is not None, abandon]) != 1:  # mistakes in the command line itself: usage, exit 2
+        context.fail("give the signals CSV of the pending trial, --failed REASON or --abandon (one of them)")
     if failed is not None and not failed.strip():
         context.fail("--failed needs a reason, such as --failed 'protective stop at t = 4 s'")
     with user_errors():
-        told = tell_trial(run_dir, signals, failed)
+        told = tell_trial(run_dir, signals, ABANDONED if abandon else failed, trial)
     summary = told.summary
     number = told.trial.trial if told.trial is not None else 0
     if as_json:
@@ -200,6 +216,9 @@ def tell(
         print(f"trial {number} failed: {told.trial.error}", file=sys.stderr)
     else:
         print(f"trial {number}: robustness {told.robustness:+.5f} ({'satisfied' if told.robustness > 0 else 'violated'})", file=sys.stderr)
+    if not told.recorded:
+        ahead = [entry for entry in told.waiting if entry.told is None and entry.trial < number]
+        print(f"trial {number} is recorded once {handed_out(ahead)} {'is' if len(ahead) == 1 else 'are'} told", file=sys.stderr)
     left = max(summary.budget - summary.trials, 0)
     best = f"best so far: trial {summary.best_trial} ({summary.best_robustness:+.5f})" if summary.best_trial is not None else "no successful trial yet"
     print(f"{best}; {left} trial{'' if left == 1 else 's'} left" + (f": stlopt ask {shlex.quote(str(run_dir))}" if left > 0 else ""), file=sys.stderr)

@@ -40,6 +40,13 @@ def batch_of(index: int, optimizer: Optimizer) -> tuple[int, int]:
     return start, min(start + workers, optimizer.trials)
 
 
+def learned_from(index: int, optimizer: Optimizer) -> int:
+    """How many trials the proposal of trial index `index` (0-based) learns from: those before
+    its batch with one worker; with several, those before the previous batch (see `next_points`)."""
+    start = batch_of(index, optimizer)[0]
+    return batch_of(start - 1, optimizer)[0] if optimizer.workers > 1 and start > 0 else start
+
+
 def next_points(history: Sequence[Trial], method: SearchMethod, running: Sequence[np.ndarray] = ()) -> list[Proposal]:
     """The points (and phases) of the trials from `len(history) + len(running) + 1` to the end
     of their batch; `running` are the points of the trials after `history` still executing.
@@ -53,7 +60,7 @@ def next_points(history: Sequence[Trial], method: SearchMethod, running: Sequenc
     optimizer = method.optimizer
     index = len(history) + len(running)
     start, end = batch_of(index, optimizer)
-    observed = batch_of(start - 1, optimizer)[0] if optimizer.workers > 1 and start > 0 else start
+    observed = learned_from(index, optimizer)
     executing = [trial.x for trial in history[observed:start]] + list(running)[: max(start - len(history), 0)]
     pending = np.array(executing).reshape(-1, method.problem.dimension)
     request = Request(history[:observed], pending, start, end - start, optimizer.seed)

@@ -94,7 +94,7 @@ def test_the_initial_points_are_handed_out_without_loading_torch(tmp_path, learn
     script = "import sys; from stl_lfd.optim.runs.asktell import ask; asked = ask(sys.argv[1]); print(asked.trial, asked.phase, 'torch' in sys.modules)"
     printed = subprocess.run([sys.executable, "-c", script, str(tmp_path / "asked")], capture_output=True, text=True, cwd=ROOT)
     assert printed.stdout.split() == ["1", "sobol", "False"], printed.stderr
-    assert json.loads((tmp_path / "asked" / "pending.json").read_text())["x"] == list(run.initial_design()[0])
+    assert json.loads((tmp_path / "asked" / "pending.json").read_text())["pending"][0]["x"] == list(run.initial_design()[0])
 
 
 @pytest.mark.slow
@@ -165,7 +165,7 @@ def test_telling_the_wrong_thing_is_a_clear_error_and_keeps_the_trial_pending(tm
     no_force.write_text("\n".join(",".join(value for index, value in enumerate(line.split(",")) if index != force) for line in lines) + "\n")
     with pytest.raises(SignalError, match=r"no_force.csv: no column force, which the spec needs"):
         tell(run, no_force)
-    assert RunDirectory.open(run).pending().trial == 2
+    assert [entry.trial for entry in RunDirectory.open(run).pending()] == [2]
     told = tell(run, None, failure="protective stop")
     assert told.trial.status == "failed" and told.trial.error == "execution failed: protective stop"
     assert ask(run).trial == 3
@@ -196,7 +196,7 @@ def test_the_commands_print_paths_and_robustness_for_scripts(tmp_path, learned_m
     done = runner.invoke(app, ["ask", str(run)])
     assert done.exit_code == 0 and done.stdout == "" and "the run has all its trials" in done.stderr
     both = runner.invoke(app, ["tell", str(run)])
-    assert both.exit_code == 2 and "give the signals CSV of the pending trial, or --failed" in both.stderr
+    assert both.exit_code == 2 and "give the signals CSV of the pending trial, --failed REASON or --abandon" in both.stderr
 
 
 @pytest.mark.slow
@@ -266,7 +266,7 @@ def test_absurd_signals_are_refused_and_the_next_ask_is_what_it_would_have_been(
                     bad = _rewritten(signals, tmp_path / f"{label}.csv", change)
                     with pytest.raises(ImplausibleSignals, match=r"\.csv"):
                         tell(run, bad)
-                    assert RunDirectory.open(run).pending().trial == 2, label
+                    assert [entry.trial for entry in RunDirectory.open(run).pending()] == [2], label
             tell(run, signals)
         proposals[name] = (ask(run).trial, read_reference_csv(ask(run).reference).positions.tolist(), recorded(run))
     assert proposals["poisoned"] == proposals["plain"]

@@ -9,6 +9,10 @@ writes it to `executions/trial-NNNN/reference.csv` and records the trial as pend
 (`pending.json`). Asking again before telling returns the same trial; a pending trial
 survives restarts. Telling records the trial, and a killed tell is completed by the next ask
 or tell (the pending record of a trial already in `trials.jsonl` is dropped).
+
+A fleet: with `optimizer.workers` W, up to W trials are pending at once, one per robot name
+(`pending.py`), proposed as `stlopt optimize --workers W` proposes them; they may be told in
+any order, and a trial never told can be abandoned (recorded as failed).
 """
 
 from __future__ import annotations
@@ -21,10 +25,11 @@ from typing import Any, Callable
 import numpy as np
 
 from stl_lfd.errors import ConfigError, ExecutionError, RunError, SignalError
-from stl_lfd.optim.loop import next_points
+from stl_lfd.optim.loop import learned_from, next_points
 from stl_lfd.optim.methods.base import sobol_points
 from stl_lfd.optim.objective import SkillObjective, objective_for, task_models
 from stl_lfd.optim.runs.directory import SIGNALS_DIR, RunDirectory, check_new_run_path
+from stl_lfd.optim.runs.pending import complete, handed_out, live_pending, recorded_in_turn, to_tell
 from stl_lfd.optim.runs.prepare import prepared_from
 from stl_lfd.optim.runs.recorder import Recorder
 from stl_lfd.optim.runs.records import Pending
@@ -41,6 +46,7 @@ from stl_lfd.sim.reference import Rollout, warn_if_untracked
 from stl_lfd.spelling import spelled
 
 REFERENCE_FILE = "reference.csv"
+ABANDONED = "abandoned: never told"  # the failure recorded for a trial given up with `tell --abandon`
 
 
 @dataclass(frozen=True)
@@ -52,16 +58,23 @@ class Asked:
     reference: Path
     phase: str
     again: bool = False
+    robot: str = ""
 
 
 @dataclass(frozen=True)
 class Told:
     """A told trial (None for trial 0, the unoptimised skill), its robustness, and the run's
-    summary after it."""
+    summary after it; `waiting`, the trials still pending (it is one of them when trials
+    handed out before it are not told yet)."""
 
     trial: Trial | None
     robustness: float | None
     summary: Summary
+    waiting: tuple[Pending, ...] = ()
+
+    @property
+    def recorded(self) -> bool:
+        return self.trial is None or all(entry.trial != self.trial.trial for entry in self.waiting)
 
 
 def ask_new(task: Task, out: Path, inputs: dict[str, Any], learn_progress: Callable[[str], None] = lambda message: None) -> Asked:
@@ -89,11 +102,17 @@ def ask(
     file_task: Task | None = None,
     given: Overrides = Overrides(),
     on_refused: Callable[[Trial], None] = lambda trial: None,
+    robot: str = "",
 ) -> Asked | None:
-    """The pending trial of the run in `out`, or the next one; None when the run has all its
-    `trials` (default: the task's). With `file_task` and `given` (the task file and options
-    named again), refuse when they ask for another run. Unsafe references become failed trials,
-    passed to `on_refused`."""
+    """The trial pending on `robot` in the run in `out`, or the next one; None when the run has
+    all its `trials` (default: the task's). With `file_task` and `given` (the task file and
+    options named again), refuse when they ask for another run. Unsafe references become
+    failed trials, passed to `on_refused`.
+
+    Raises:
+        RunError: as many trials are pending as the task's workers allow, or the next trial is
+            chosen from trials not told yet.
+    """
     run = RunDirectory.open(out, for_writing=True)
     try:
         task = run.task()
@@ -105,49 +124,72 @@ def ask(
                 raise ConfigError(f"{spelled('trials')} {trials}: the run {out} has {done} trials already; ask for at least {done}")
             task = task.with_overrides(trials=trials)
             run.write_task(task)  # the budget `tell` and `report` count with, as --resume -N extends a run
-        pending = _live_pending(run)
-        if pending is not None:
-            return Asked(pending.trial, _reference_path(run.path, pending.trial), pending.phase, again=True)
-        prepared = prepared_from(run, task, execute=False)
-        recorder, objective = Recorder(prepared, ASK_TELL), prepared.objective
-        design = run.initial_design()
-        if design is not None and design.shape != (task.optimizer.initial, len(prepared.space.bounds[0])):
-            design = None
-        method = prepared.search_method(design)
-        while len(recorder.history) < task.optimizer.trials:
-            start = time.perf_counter()
-            x, phase = next_points(recorder.history, method)[0]
-            number = len(recorder.history) + 1
-            try:
-                reference = objective.reference(prepared.space.apply(prepared.models, x))
-                gate(reference, objective.scene)
-            except ExecutionError as error:  # unsafe, or no reference at all: a failed trial, as optimise records it
-                seconds = time.perf_counter() - start
-                trial = Trial(number, phase, x, None, "failed", str(error), optimizer_seconds=seconds)
-                recorder.record(trial, None, seconds)
-                on_refused(trial)
-                continue
-            _write_reference(reference, run.path, number, objective.scene.gripper_opening)
-            run.write_pending(Pending(number, phase, x, time.perf_counter() - start, time.time()))
-            return Asked(number, _reference_path(run.path, number), phase)
-        return None
+        entries = live_pending(run)
+        mine = next((entry for entry in entries if entry.robot == robot and entry.told is None), None)
+        if mine is not None:
+            return Asked(mine.trial, _reference_path(run.path, mine.trial), mine.phase, again=True, robot=robot)
+        _check_room(out, task, entries)
+        return _next_trial(run, task, entries, robot, on_refused)
     finally:
         run.close()
 
 
-def tell(out: Path, signals_path: Path | None, failure: str | None = None) -> Told:
-    """Record the pending trial of the run in `out`: the signals its execution recorded, or
-    (`failure`, for trials 1 and up) that the execution failed and why.
+def _check_room(out: Path, task: Task, entries: list[Pending]) -> None:
+    if entries and entries[0].trial == 0:
+        raise RunError(f"{out}: trial 0, the unoptimised skill, is handed out to {entries[0].holder}; the run needs its signals before any other trial")
+    if len([entry for entry in entries if entry.told is None]) >= task.optimizer.workers:
+        raise RunError(
+            f"{out}: {handed_out(entries)} (the task's optimizer.workers lets {task.optimizer.workers} trial{'s' if task.optimizer.workers > 1 else ''} "
+            "be handed out at once); tell one first"
+        )
+
+
+def _next_trial(run: RunDirectory, task: Task, entries: list[Pending], robot: str, on_refused: Callable[[Trial], None]) -> Asked | None:
+    """Choose, check and hand out the next trial to `robot` (refused ones recorded on the way)."""
+    prepared = prepared_from(run, task, execute=False)
+    recorder, objective = Recorder(prepared, ASK_TELL), prepared.objective
+    entries = recorded_in_turn(recorder, entries)
+    design = run.initial_design()
+    if design is not None and design.shape != (task.optimizer.initial, len(prepared.space.bounds[0])):
+        design = None
+    method = prepared.search_method(design)
+    while len(recorder.history) + len(entries) < task.optimizer.trials:
+        start = time.perf_counter()
+        number = len(recorder.history) + len(entries) + 1
+        needed = learned_from(number - 1, task.optimizer)
+        if len(recorder.history) < needed:
+            missing = [entry for entry in entries if entry.trial <= needed and entry.told is None]
+            raise RunError(f"{run.path}: trial {number} is chosen from trials 1 to {needed}; tell {handed_out(missing)} first")
+        x, phase = next_points(recorder.history, method, [entry.x for entry in entries])[0]
+        try:
+            reference = objective.reference(prepared.space.apply(prepared.models, x))
+            gate(reference, objective.scene)
+        except ExecutionError as error:  # unsafe, or no reference at all: a failed trial, as optimise records it
+            seconds = time.perf_counter() - start
+            trial = Trial(number, phase, x, None, "failed", str(error), optimizer_seconds=seconds)
+            entries = complete(run, recorder, entries, trial, None)
+            on_refused(trial)
+            continue
+        _write_reference(reference, run.path, number, objective.scene.gripper_opening)
+        run.write_pending([*entries, Pending(number, phase, x, time.perf_counter() - start, time.time(), robot)])
+        return Asked(number, _reference_path(run.path, number), phase, robot=robot)
+    return None
+
+
+def tell(out: Path, signals_path: Path | None, failure: str | None = None, trial: int | None = None) -> Told:
+    """Record a pending trial of the run in `out` (number `trial`; by default the one whose
+    exchange folder holds the signals, or the only one): the signals its execution recorded,
+    or (`failure`, for trials 1 and up) that the execution failed and why. A trial told before
+    those handed out ahead of it is recorded once they are.
 
     Raises:
-        RunError: nothing is pending, or the signals belong to another trial.
+        RunError: nothing is pending, `trial` is not, or the signals belong to another trial.
         SignalError: the CSV is unreadable, too short, or lacks a signal the spec needs.
     """
     run = RunDirectory.open(out, for_writing=True)
     try:
-        pending = _live_pending(run)
-        if pending is None:
-            raise RunError(f"{out}: no trial is pending; hand out the next one with: stlopt ask {out}")
+        entries = live_pending(run)
+        pending = to_tell(entries, Path(out), trial, signals_path)
         task = run.task()
         reference = read_reference_csv(_reference_path(run.path, pending.trial))
         if pending.trial == 0:
@@ -158,11 +200,10 @@ def tell(out: Path, signals_path: Path | None, failure: str | None = None) -> To
         prepared = prepared_from(run, task, execute=False)
         outcome = f"execution failed: {failure}" if failure is not None else _scored(prepared.objective, reference, Path(signals_path), run, pending.trial)
         seconds = max(time.time() - pending.asked, 0.0)
-        trial = Trial.of_outcome(pending.trial, pending.phase, pending.x, outcome, pending.optimizer_seconds, seconds)
+        told = Trial.of_outcome(pending.trial, pending.phase, pending.x, outcome, pending.optimizer_seconds, seconds)
         recorder = Recorder(prepared, ASK_TELL)
-        recorder.record(trial, None if isinstance(outcome, str) else outcome.payload, trial.wall_seconds)
-        run.clear_pending()
-        return Told(trial, trial.robustness, recorder.summary())
+        waiting = complete(run, recorder, entries, told, None if isinstance(outcome, str) else outcome.payload, pending)
+        return Told(told, told.robustness, recorder.summary(), tuple(waiting))
     finally:
         run.close()
 
@@ -213,18 +254,6 @@ def _check_follows(signals: Any, reference: Reference, errors: np.ndarray, toler
                 f"{signals.source}: these signals follow the reference of {folder.name} (worst error {1000 * other_errors.max():.1f} mm), "
                 f"not that of the pending trial {trial} ({1000 * errors.max():.1f} mm); tell the signals of trial {trial}"
             )
-
-
-def _live_pending(run: RunDirectory) -> Pending | None:
-    """The pending trial, unless a tell killed after recording it left its record behind."""
-    pending = run.pending()
-    if pending is None:
-        return None
-    recorded = (run.path / "summary.json").exists() if pending.trial == 0 else len(run.trials()) >= pending.trial
-    if recorded:
-        run.clear_pending()
-        return None
-    return pending
 
 
 def _reference_path(run_dir: Path, trial: int) -> Path:

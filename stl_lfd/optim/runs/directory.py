@@ -175,25 +175,28 @@ class RunDirectory:
         path = self.signals_path(trial)
         return read_signal_csv(path) if path.is_file() else None
 
-    def pending(self) -> "Pending | None":
-        """The trial handed out by `stlopt ask` and not told yet, if any."""
+    def pending(self) -> list[Pending]:
+        """The trials handed out by `stlopt ask` and not recorded yet, in trial order (a run
+        recorded before several could be pending holds one, as a single record)."""
         path = self.path / PENDING_FILE
         if not path.exists():
-            return None
+            return []
         try:
             data = json.loads(path.read_text())
-            pending = Pending(int(data["trial"]), str(data["phase"]), None if data["x"] is None else np.array(data["x"], dtype=float),
-                              float(data["optimizer_seconds"]), float(data["asked"]))  # fmt: skip
+            entries = [Pending.from_json(item) for item in (data["pending"] if "pending" in data else [data])]
         except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
             raise RunError(f"{path}: damaged ({getattr(error, 'msg', error)}); delete it to ask again") from None
-        if pending.trial < 0 or (pending.x is None) != (pending.trial == 0):
-            raise RunError(f"{path}: damaged (trial {pending.trial}); delete it to ask again")
-        return pending
+        for pending in entries:
+            if pending.trial < 0 or (pending.x is None) != (pending.trial == 0) or (pending.told is not None and pending.told.trial != pending.trial):
+                raise RunError(f"{path}: damaged (trial {pending.trial}); delete it to ask again")
+        return sorted(entries, key=lambda pending: pending.trial)
 
-    def write_pending(self, pending: "Pending") -> None:
-        data = {"trial": pending.trial, "phase": pending.phase, "x": None if pending.x is None else [float(value) for value in pending.x],
-                "optimizer_seconds": pending.optimizer_seconds, "asked": pending.asked}  # fmt: skip
-        write_atomically(self.path / PENDING_FILE, json.dumps(data, indent=2) + "\n")
+    def write_pending(self, entries: list[Pending]) -> None:
+        """Keep `entries` as the pending trials (none: the file goes)."""
+        if not entries:
+            self.clear_pending()
+            return
+        write_atomically(self.path / PENDING_FILE, json.dumps({"pending": [pending.to_json() for pending in entries]}, indent=2) + "\n")
 
     def initial_design(self) -> np.ndarray | None:
         """The `M x d` initial (Sobol) points, if the run recorded them (runs asked for do)."""

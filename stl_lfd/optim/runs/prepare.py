@@ -152,9 +152,10 @@ def _reopen(run: RunDirectory, out: Path, trials: int | None, file_task: Task | 
         check_resume(Path(out), task, run.inputs(), file_task, given)
     if trials is not None:
         task = task.with_overrides(trials=trials)
-    pending = run.pending()
-    if pending is not None:
-        raise RunError(f"{out}: trial {pending.trial} was handed out by stlopt ask and is not told yet; tell its signals first (stlopt tell {out} SIGNALS.csv)")
+    pending = [entry for entry in run.pending() if entry.told is None]
+    if pending:
+        handed = ", ".join(f"trial {entry.trial} to {entry.holder}" for entry in pending)
+        raise RunError(f"{out}: stlopt ask handed out {handed}, not told yet; tell its signals first (stlopt tell {out} SIGNALS.csv --trial N)")
     missing = run.missing_signals()
     if missing:
         listed = ", ".join(str(path.relative_to(run.path)) for path in missing)

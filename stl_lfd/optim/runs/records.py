@@ -1,5 +1,5 @@
 """The records of a run directory's files: trials as JSON lines (`trials.jsonl`) and the
-pending trial of `stlopt ask` (`pending.json`)."""
+trials `stlopt ask` handed out and that are not recorded yet (`pending.json`)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from stl_lfd.optim.trials import Trial
 
 @dataclass(frozen=True)
 class Pending:
-    """A trial handed out by `stlopt ask`, waiting for its signals (`pending.json`).
+    """A trial handed out by `stlopt ask` and not recorded yet (an entry of `pending.json`).
 
     Attributes:
         trial: its number (0: the unoptimised skill).
@@ -22,6 +22,9 @@ class Pending:
         x: its point (None for trial 0).
         optimizer_seconds: time spent choosing it.
         asked: when it was handed out (seconds since the epoch).
+        robot: the name it was handed out to ("" when none was given).
+        told: the trial as told, while it waits for the trials before it to be recorded (its
+            signals are already in the run's signals/ folder); None until it is told.
     """
 
     trial: int
@@ -29,6 +32,24 @@ class Pending:
     x: np.ndarray | None
     optimizer_seconds: float
     asked: float
+    robot: str = ""
+    told: Trial | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        data = {"trial": self.trial, "phase": self.phase, "x": None if self.x is None else [float(value) for value in self.x],
+                "optimizer_seconds": self.optimizer_seconds, "asked": self.asked, "robot": self.robot}  # fmt: skip
+        return data | ({"told": trial_to_json(self.told)} if self.told is not None else {})
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> "Pending":
+        x = None if data["x"] is None else np.array(data["x"], dtype=float)
+        told = trial_from_json(data["told"]) if data.get("told") is not None else None
+        return cls(int(data["trial"]), str(data["phase"]), x, float(data["optimizer_seconds"]), float(data["asked"]), str(data.get("robot", "")), told)
+
+    @property
+    def holder(self) -> str:
+        """Who has it, for messages: `robot NAME`, or `the executor` for a nameless ask."""
+        return f"robot {self.robot}" if self.robot else "the executor"
 
 
 def finite(value: Any) -> bool:

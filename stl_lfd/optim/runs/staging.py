@@ -101,7 +101,7 @@ class StagedRun:
         if summary is not None:
             run.write_summary(summary)
         if pending is not None:
-            run.write_pending(pending)
+            run.write_pending([pending])
         if design is not None:
             write_atomically(staging / DESIGN_FILE, json.dumps([[float(value) for value in point] for point in design]) + "\n")
         if self.destination.exists():
