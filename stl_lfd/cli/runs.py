@@ -167,7 +167,8 @@ def ask(
     print(asked.reference)
     what = "the unoptimised skill" if asked.trial == 0 else "an initial trial, chosen on its plan" if asked.phase == "design" else f"chosen by {asked.phase}"
     state = ("still pending" if asked.again else "to execute") + (f" on robot {robot}" if robot else "")
-    print(f"trial {asked.trial} ({what}) {state}; then: stlopt tell {shlex.quote(str(run_dir))} SIGNALS.csv --trial {asked.trial}", file=sys.stderr)
+    which = f" --trial {asked.trial}" if robot else ""  # a fleet's robots tell their own trial
+    print(f"trial {asked.trial} ({what}) {state}; then: stlopt tell {shlex.quote(str(run_dir))} SIGNALS.csv{which}", file=sys.stderr)
 
 
 @app.command(cls=PlainUsage)
