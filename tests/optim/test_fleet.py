@@ -111,3 +111,14 @@ def test_the_commands_of_a_fleet(tmp_path, learned_model_file):
     gone = runner.invoke(app, ["tell", str(run), "--trial", "1", "--abandon"])
     assert gone.exit_code == 0 and "trial 1 failed: execution failed: abandoned: never told" in gone.stderr
     assert [trial[2] for trial in recorded(run)] == ["failed", "ok"]
+
+
+def test_a_run_asked_for_before_fleets_keeps_its_pending_trial(tmp_path, learned_model_file):
+    _, run = fleet_task(tmp_path, learned_model_file)
+    asked = ask(run)
+    single = json.loads((run / "pending.json").read_text())["pending"][0]
+    del single["robot"]
+    (run / "pending.json").write_text(json.dumps(single))  # pending.json as runs wrote it before
+    again = ask(run)
+    assert (again.trial, again.again) == (asked.trial, True)
+    assert tell(run, execute_kinematically(asked.reference)).recorded and len(recorded(run)) == 1
