@@ -116,6 +116,14 @@ class RunError(StlLfdError):
     exit_code = 9
 
 
+class WaitError(RunError):
+    """No trial can be handed out until a pending one is told: as many are out as the run's
+    workers allow, or the next is chosen from trials not told yet. A fleet's script asks again
+    after its next tell."""
+
+    exit_code = 10
+
+
 def caret_context(text: str, line: int, column: int) -> str:
     """The `line`-th line of `text` (1-based) and a caret under `column` (1-based)."""
     lines = text.splitlines()

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from stl_lfd.errors import RunError
+from stl_lfd.errors import RunError, WaitError
 from stl_lfd.optim import finish_run, load_task, start_run
 from stl_lfd.optim.runs.asktell import ABANDONED, ask, ask_new, tell
 from stl_lfd.optim.runs.directory import RunDirectory
@@ -53,7 +53,7 @@ def test_a_third_robot_waits_and_a_trial_told_early_is_recorded_after_those_befo
     _, run = fleet_task(tmp_path, learned_model_file)
     first, second = ask(run, robot="a"), ask(run, robot="b")
     assert (first.trial, second.trial) == (1, 2) and ask(run, robot="a").again
-    with pytest.raises(RunError, match=r"trial 1 to robot a, trial 2 to robot b \(the task's optimizer.workers lets 2 trials be handed out at once\)"):
+    with pytest.raises(WaitError, match=r"trial 1 to robot a, trial 2 to robot b \(the task's optimizer.workers lets 2 trials be handed out at once\)"):
         ask(run, robot="c")
     early = tell(run, execute_kinematically(second.reference), trial=2)
     assert not early.recorded and early.robustness is not None and recorded(run) == []
@@ -85,7 +85,7 @@ def test_a_trial_waits_for_the_trials_its_batch_learns_from(tmp_path, learned_mo
         fast = ask(run, robot="fast")
         assert fast.trial == expected
         tell(run, execute_kinematically(fast.reference), trial=fast.trial)
-    with pytest.raises(RunError, match=r"trial 5 is chosen from trials 1 to 2; tell trial 1 to robot slow first"):
+    with pytest.raises(WaitError, match=r"trial 5 is chosen from trials 1 to 2; tell trial 1 to robot slow first"):
         ask(run, robot="fast")
     tell(run, execute_kinematically(slow.reference), trial=1)
     assert len(recorded(run)) == 4 and ask(run, robot="fast").trial == 5
@@ -108,6 +108,8 @@ def test_the_commands_of_a_fleet(tmp_path, learned_model_file):
     assert early.exit_code == 0 and "trial 2 is recorded once trial 1 to robot a is told" in early.stderr
     busy = runner.invoke(app, ["ask", str(run), "--robot", "c"])
     assert busy.exit_code == 0 and busy.stdout.strip().endswith("trial-0003/reference.csv")  # trial 2 is told: a place is free
+    full = runner.invoke(app, ["ask", str(run), "--robot", "d"])
+    assert full.exit_code == 10 and full.stdout == "" and "trial 1 to robot a, trial 3 to robot c" in full.stderr
     gone = runner.invoke(app, ["tell", str(run), "--trial", "1", "--abandon"])
     assert gone.exit_code == 0 and "trial 1 failed: execution failed: abandoned: never told" in gone.stderr
     assert [trial[2] for trial in recorded(run)] == ["failed", "ok"]

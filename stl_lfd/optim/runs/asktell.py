@@ -24,7 +24,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from stl_lfd.errors import ConfigError, ExecutionError, RunError, SignalError
+from stl_lfd.errors import ConfigError, ExecutionError, RunError, SignalError, WaitError
 from stl_lfd.optim.loop import learned_from, next_points
 from stl_lfd.optim.methods.base import sobol_points
 from stl_lfd.optim.objective import SkillObjective, objective_for, task_models
@@ -110,8 +110,8 @@ def ask(
     failed trials, passed to `on_refused`.
 
     Raises:
-        RunError: as many trials are pending as the task's workers allow, or the next trial is
-            chosen from trials not told yet.
+        WaitError: as many trials are pending as the task's workers allow, or the next trial is
+            chosen from trials not told yet (ask again after a tell).
     """
     run = RunDirectory.open(out, for_writing=True)
     try:
@@ -136,9 +136,9 @@ def ask(
 
 def _check_room(out: Path, task: Task, entries: list[Pending]) -> None:
     if entries and entries[0].trial == 0:
-        raise RunError(f"{out}: trial 0, the unoptimised skill, is handed out to {entries[0].holder}; the run needs its signals before any other trial")
+        raise WaitError(f"{out}: trial 0, the unoptimised skill, is handed out to {entries[0].holder}; the run needs its signals before any other trial")
     if len([entry for entry in entries if entry.told is None]) >= task.optimizer.workers:
-        raise RunError(
+        raise WaitError(
             f"{out}: {handed_out(entries)} (the task's optimizer.workers lets {task.optimizer.workers} trial{'s' if task.optimizer.workers > 1 else ''} "
             "be handed out at once); tell one first"
         )
@@ -159,7 +159,7 @@ def _next_trial(run: RunDirectory, task: Task, entries: list[Pending], robot: st
         needed = learned_from(number - 1, task.optimizer)
         if len(recorder.history) < needed:
             missing = [entry for entry in entries if entry.trial <= needed and entry.told is None]
-            raise RunError(f"{run.path}: trial {number} is chosen from trials 1 to {needed}; tell {handed_out(missing)} first")
+            raise WaitError(f"{run.path}: trial {number} is chosen from trials 1 to {needed}; tell {handed_out(missing)} first")
         x, phase = next_points(recorder.history, method, [entry.x for entry in entries])[0]
         try:
             reference = objective.reference(prepared.space.apply(prepared.models, x))
