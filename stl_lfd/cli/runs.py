@@ -141,6 +141,7 @@ def ask(
     from stl_lfd.optim import Overrides, load_task
     from stl_lfd.optim.runs.asktell import ask as ask_trial
     from stl_lfd.optim.runs.asktell import ask_new
+    from stl_lfd.optim.runs.pending import still_out
     from stl_lfd.optim.runs.resume import inputs_record
 
     given = Overrides(spec=spec, seed=seed, initial=init, trials=iterations, method=method.value if method else None, workers=workers)
@@ -162,7 +163,11 @@ def ask(
                 task = given.applied_to(file_task)
                 asked = ask_new(task, run_dir, inputs_record(file_task, given, task), lambda message: print(message, file=sys.stderr))
     if asked is None:
-        print(f"{run_dir}: the run has all its trials (raise --iterations to extend it; stlopt report {run_dir})", file=sys.stderr)
+        out = still_out(run_dir)
+        done = (
+            f"every trial is handed out; the run is complete once {out} {'is' if out.count(',') == 0 else 'are'} told" if out else "the run has all its trials"
+        )
+        print(f"{run_dir}: {done} (raise --iterations to extend it; stlopt report {run_dir})", file=sys.stderr)
         return
     print(asked.reference)
     what = "the unoptimised skill" if asked.trial == 0 else "an initial trial, chosen on its plan" if asked.phase == "design" else f"chosen by {asked.phase}"

@@ -113,6 +113,12 @@ def test_the_commands_of_a_fleet(tmp_path, learned_model_file):
     gone = runner.invoke(app, ["tell", str(run), "--trial", "1", "--abandon"])
     assert gone.exit_code == 0 and "trial 1 failed: execution failed: abandoned: never told" in gone.stderr
     assert [trial[2] for trial in recorded(run)] == ["failed", "ok"]
+    for number in (4, 5):  # robot a takes the last two trials of 5 and tells them while trial 3 is out
+        taken = runner.invoke(app, ["ask", str(run), "--robot", "a"])
+        assert taken.stdout.strip().endswith(f"trial-000{number}/reference.csv"), taken.stderr
+        assert runner.invoke(app, ["tell", str(run), str(execute_kinematically(taken.stdout.strip())), "--trial", str(number)]).exit_code == 0
+    last = runner.invoke(app, ["ask", str(run), "--robot", "e"])
+    assert last.exit_code == 0 and last.stdout == "" and "every trial is handed out; the run is complete once trial 3 to robot c is told" in last.stderr
 
 
 def test_a_run_asked_for_before_fleets_keeps_its_pending_trial(tmp_path, learned_model_file):

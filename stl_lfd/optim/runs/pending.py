@@ -39,6 +39,11 @@ def handed_out(entries: list[Pending]) -> str:
     return ", ".join(f"trial {entry.trial} to {entry.holder}" for entry in entries if entry.told is None)
 
 
+def still_out(run_path: Path) -> str:
+    """The trials of the run in `run_path` handed out and not told yet, for messages ('' if none)."""
+    return handed_out(RunDirectory(Path(run_path)).pending())
+
+
 def to_tell(entries: list[Pending], run_path: Path, trial: int | None, signals: Path | None) -> Pending:
     """The pending trial a tell is about: trial number `trial`; else the one whose exchange
     folder holds `signals`; else the only one not told yet.
