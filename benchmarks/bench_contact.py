@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks._records import commit, recorded_results, seed_list
-from benchmarks.physical import flung, holder_pose, shaft_end
+from benchmarks.physical import end_offset, flung, holder_pose, shaft_end
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "contact.jsonl"
@@ -50,14 +50,16 @@ def one_run(job: tuple[str, str, int, int, str]) -> dict[str, Any]:
         trials = run.trials()
         robustness = [summary.initial_robustness] + [trial.robustness for trial in trials]
         components = [summary.initial_components or {}] + [trial.components or {} for trial in trials]
-        ends, thrown_up = [], []
+        ends, thrown_up, offsets = [], [], []
         for number in range(len(robustness)):
             signals = run.recorded_signals(number)
             ends.append("failed" if signals is None else shaft_end(signals, holder))
             thrown_up.append(signals is not None and flung(signals))
+            offsets.append(end_offset(signals) if signals is not None else float("nan"))
     satisfied = [value is not None and value > 0 for value in robustness]
     physical = [end == "inserted" and not up for end, up in zip(ends, thrown_up)]
     rejected = Counter(part for ok, inside, parts in zip(satisfied, physical, components) if inside and not ok for part, value in parts.items() if value <= 0)
+    rejected_offsets = [round(1000 * offset, 1) for ok, inside, offset in zip(satisfied, physical, offsets) if inside and not ok]
     counts = Counter(ends)
     return {
         "task": task_name,
@@ -74,6 +76,7 @@ def one_run(job: tuple[str, str, int, int, str]) -> dict[str, Any]:
         "best_satisfied": bool(summary.best_robustness is not None and summary.best_robustness > 0),
         "best_physically_inserted": bool(summary.best_trial is not None and physical[summary.best_trial]),
         "rejected_inserted": dict(rejected),
+        "rejected_offsets_mm": rejected_offsets,  # where each of those shafts ends, from the hole's axis
         "ends": "".join(end[0].upper() for end in ends),  # per trial from the unoptimised one: T, I, O, F
         "wall_seconds": round(time.perf_counter() - start, 1),
     }

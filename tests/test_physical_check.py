@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from benchmarks.physical import flung, physically_inserted, shaft_end
+from benchmarks.physical import end_offset, flung, physically_inserted, shaft_end
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
 
@@ -38,3 +38,9 @@ def test_where_the_shaft_ends(end, tilt, jump, where, inside):
     assert shaft_end(signals, HOLDER) == where
     assert flung(signals) == jump
     assert physically_inserted(signals, HOLDER) == inside
+
+
+def test_a_shaft_in_a_corner_of_the_hole_is_inserted_beyond_the_specs_offset():
+    corner = HOLDER.to_base(np.array([[0.0055, 0.0055, 0.04]]))[0]  # 5.5 mm off the axis in both of the holder's axes
+    signals = recording(corner)
+    assert physically_inserted(signals, HOLDER) and end_offset(signals) == pytest.approx(0.0055 * np.sqrt(2), abs=1e-9)
