@@ -225,7 +225,7 @@ def tell(
     if not told.recorded:
         ahead = [entry for entry in told.waiting if entry.told is None and entry.trial < number]
         print(f"trial {number} is recorded once {handed_out(ahead)} {'is' if len(ahead) == 1 else 'are'} told", file=sys.stderr)
-    left = max(summary.budget - summary.trials, 0)
+    left = max(summary.budget - summary.trials - len(told.waiting), 0)  # trials still to hand out (a fleet's pending ones are out)
     best = f"best so far: trial {summary.best_trial} ({summary.best_robustness:+.5f})" if summary.best_trial is not None else "no successful trial yet"
     print(f"{best}; {left} trial{'' if left == 1 else 's'} left" + (f": stlopt ask {shlex.quote(str(run_dir))}" if left > 0 else ""), file=sys.stderr)
 

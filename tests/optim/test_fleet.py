@@ -106,6 +106,7 @@ def test_the_commands_of_a_fleet(tmp_path, learned_model_file):
     assert "to execute on robot b; then: stlopt tell" in handed["b"].stderr and handed["b"].stderr.rstrip().endswith("--trial 2")
     early = runner.invoke(app, ["tell", str(run), str(execute_kinematically(handed["b"].stdout.strip())), "--trial", "2"])
     assert early.exit_code == 0 and "trial 2 is recorded once trial 1 to robot a is told" in early.stderr
+    assert "3 trials left" in early.stderr  # of 5: trials 1 and 2 are out
     busy = runner.invoke(app, ["ask", str(run), "--robot", "c"])
     assert busy.exit_code == 0 and busy.stdout.strip().endswith("trial-0003/reference.csv")  # trial 2 is told: a place is free
     full = runner.invoke(app, ["ask", str(run), "--robot", "d"])
