@@ -11,6 +11,7 @@ workers), so a fleet's run is the run `stlopt optimize --workers` makes with the
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -81,10 +82,7 @@ def complete(run: RunDirectory, recorder: Recorder, entries: list[Pending], tria
         if signals is not None:
             write_signal_csv(signals, run.signals_path(trial.trial))
         handed = handed or Pending(trial.trial, trial.phase, trial.x, trial.optimizer_seconds, time.time())
-        entries = sorted(
-            [*entries, Pending(handed.trial, handed.phase, handed.x, handed.optimizer_seconds, handed.asked, handed.robot, trial)],
-            key=lambda entry: entry.trial,
-        )
+        entries = sorted([*entries, replace(handed, told=trial)], key=lambda entry: entry.trial)
     run.write_pending(entries)
     return entries
 
