@@ -8,6 +8,7 @@ from benchmarks import (
     bench_optim,
     bench_placements,
     bench_plan,
+    bench_ray,
     bench_reorient,
     bench_sim,
     bench_stl,
@@ -22,6 +23,7 @@ def main() -> None:
     bench_endpoint.main()
     bench_sim.main()
     bench_command.main([])
+    bench_ray.main([])
     bench_optim.main([])
     bench_plan.main([])
     bench_tracking.main([])

@@ -50,6 +50,11 @@ def optimize(
     command: Optional[str] = CommandOption,
     command_timeout: Optional[float] = CommandTimeoutOption,
     workers: Optional[int] = typer.Option(None, "--workers", help="Trials run at once, each batch proposed together (default: the task's, or 1)."),
+    ray: Optional[str] = typer.Option(
+        None,
+        "--ray",
+        help="Run the trials on a Ray cluster, --workers at once: 'auto' (this machine's cluster) or a cluster address (default: local processes).",
+    ),
     place: list[str] = typer.Option([], "--place", help=PLACE_HELP + " Replaces the task's placements."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="On stderr, only what runs and the verdict (no line per trial); errors still show."),
 ) -> None:
@@ -73,6 +78,7 @@ def optimize(
     \b
         stlopt optimize configs/phi1.yaml --seed 3 --out runs/phi1-seed3
         stlopt optimize configs/phi1.yaml --out runs/phi1-seed3 --resume -N 48
+        stlopt optimize configs/phi1.yaml --workers 4 --ray auto
         stlopt optimize --spec specs/phi2.stl
         stlopt optimize --spec my.stl --demos demos/three_regions
     """
@@ -88,6 +94,10 @@ def optimize(
             workers=workers, command=command_of(command, command_timeout, file_task.command), placements=placements_of(file_task.scene, place),
         )  # fmt: skip
         run_dir = out or Path("runs") / file_task.name
+        if ray is not None:
+            from stl_lfd.optim.runs.ray_workers import connect
+
+            connect(ray)  # before the run starts: a cluster that cannot be reached leaves nothing behind
         if resume:
             prepared = resume_run(run_dir, iterations, file_task, given)
         else:
@@ -100,7 +110,7 @@ def optimize(
     with prepared, user_errors(on_interrupt=f"interrupted; the finished trials are kept. Continue with: {again}"):
         printer = TrialPrinter(prepared, quiet=quiet)
         try:
-            summary = finish_run(prepared, printer.trial)
+            summary = finish_run(prepared, printer.trial, ray=ray)
         finally:
             printer.stop()
         printer.done(summary)

@@ -102,11 +102,12 @@ def run_remaining_trials(
         numbers = range(len(history) + 1, len(history) + 1 + len(batch))
         following, following_seconds, following_wait = [], 0.0, None
         if pipelined and numbers[-1] < optimizer.trials:
+            # queued behind this batch at once: a worker that finishes its trial starts the next
             following, following_seconds = proposed([x for x, _ in batch])
-        outcomes = wait()
-        execution_seconds = time.perf_counter() - submitted
-        if following:  # the workers start on the next batch before this one is recorded
             following_wait, following_submitted = started(following, numbers[-1] + 1)
+        outcomes = wait()
+        arrived = time.perf_counter()
+        execution_seconds = arrived - submitted
         for (x, phase), number, outcome in zip(batch, numbers, outcomes):
             trial = Trial.of_outcome(number, phase, x, outcome, proposal_seconds / len(batch), execution_seconds / len(batch))
             history.append(trial)
@@ -115,8 +116,8 @@ def run_remaining_trials(
             following, following_seconds = proposed()
             following_wait, following_submitted = started(following, len(history) + 1)
         batch, proposal_seconds = following, following_seconds
-        if batch:
-            wait, submitted = following_wait, following_submitted
+        if batch:  # a batch queued behind this one is timed from when this one's outcomes arrived
+            wait, submitted = following_wait, max(following_submitted, arrived) if pipelined else following_submitted
     return history
 
 

@@ -57,9 +57,10 @@ def combined_execution(before: str, now: str) -> str:
     return f"{before}, then {now}"
 
 
-def finish_run(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None) -> Summary:
+def finish_run(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], None] = lambda trial, best: None, ray: str | None = None) -> Summary:
     """Run the remaining trials of `prepared`, recording each (then `on_trial(trial, best)`);
-    returns the final summary."""
+    returns the final summary. `ray`: run the trials on this Ray cluster (`ray_workers.connect`)
+    instead of in this process or local worker processes."""
     recorder = Recorder(prepared)
     mark = time.perf_counter()
 
@@ -73,12 +74,7 @@ def finish_run(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], 
     def objective(x: np.ndarray) -> Outcome:
         return prepared.objective(x, trial=len(recorder.history) + 1)
 
-    workers = prepared.task.optimizer.workers
-    pool = None
-    if workers > 1:
-        from stl_lfd.optim.runs.workers import WorkerPool
-
-        pool = WorkerPool(ObjectiveFactory(prepared.task, prepared.models, prepared.run.path), workers)
+    pool = trial_pool(prepared, ray) if len(prepared.history) < prepared.task.optimizer.trials else None
     try:
         run_remaining_trials(objective, prepared.search_method(), prepared.history, record, pool)
     except BaseException:
@@ -94,3 +90,19 @@ def finish_run(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], 
     summary = recorder.summary()
     prepared.run.write_summary(summary)
     return summary
+
+
+def trial_pool(prepared: PreparedRun, ray: str | None) -> Any:
+    """Who executes the trials of `prepared` besides this process: Ray actors on the cluster
+    `ray`, local worker processes when the task has several workers, or nobody (None)."""
+    workers = prepared.task.optimizer.workers
+    make_objective = ObjectiveFactory(prepared.task, prepared.models, prepared.run.path)
+    if ray is not None:
+        from stl_lfd.optim.runs.ray_workers import RayPool
+
+        return RayPool(make_objective, workers, ray)
+    if workers > 1:
+        from stl_lfd.optim.runs.workers import WorkerPool
+
+        return WorkerPool(make_objective, workers)
+    return None

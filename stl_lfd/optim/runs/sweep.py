@@ -21,10 +21,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
-from stl_lfd.errors import ConfigError, RunError
+from stl_lfd.errors import RunError
 from stl_lfd.files import write_atomically
 from stl_lfd.optim.runs.sweep_file import Cell, Sweep
-from stl_lfd.spelling import spelled
 
 RUNS_DIR = "runs"
 TABLE_FILE = "sweep.csv"
@@ -108,12 +107,11 @@ def ray_map(function: Callable[[Any], Any], items: Iterable[Any], address: str |
     """`(item, function(item))` for each item, computed by Ray tasks of one CPU each, in the
     order they finish. `address`: `auto` (the cluster this machine belongs to), a cluster's
     address, or None for a Ray already initialised by the caller (or a new local one)."""
-    try:
-        import ray
-    except ImportError:
-        raise ConfigError(f"{spelled('ray')} needs Ray: pip install 'stlopt[ray]'") from None
-    if not ray.is_initialized():
-        ray.init(address=address, runtime_env={"env_vars": {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}}, log_to_driver=False)
+    from stl_lfd.optim.runs.ray_workers import connect
+
+    connect(address)
+    import ray
+
     remote = ray.remote(num_cpus=1)(function)
     pending = {remote.remote(item): item for item in items}
     try:

@@ -6,6 +6,10 @@ deadlock), run single-threaded, and are given the task and models once, at start
 batch of `(x, trial)` pairs is executed one pair per worker; the outcomes come back in the
 batch's order, a failure as its message.
 
+An outcome comes back through a file in a scratch folder, and only its name through the pool's
+result pipe: a worker killed while writing a large outcome into that pipe would leave a partial
+message there, and the pool waiting for its end forever; a name is written in one piece.
+
 A worker that dies (killed, or crashed in native code) stops the run with one error line; the
 trials in flight are lost, as with Ctrl-C, and `--resume` continues exactly. Workers watch
 their parent and end themselves when it is gone (killed with SIGKILL, say), stopping their
@@ -16,9 +20,13 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import pickle
+import shutil
+import tempfile
 import threading
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
@@ -28,6 +36,7 @@ from stl_lfd.optim.trials import Outcome, describe_error
 from stl_lfd.spelling import spelled
 
 _objective = None  # the worker process's own objective, built by `_start`
+_outbox: Path | None = None  # where the worker process writes its outcomes (`_handed_back`)
 _busy = False  # whether the worker is evaluating a trial (a stop then unwinds it first)
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")  # one thread per worker
 WORKER_NICENESS = 10
@@ -42,8 +51,9 @@ class WorkerPool:
         context = multiprocessing.get_context("spawn")
         saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
         os.environ.update({name: "1" for name in THREAD_VARIABLES})  # inherited by the workers as they start
+        self.outbox = Path(tempfile.mkdtemp(prefix="stlopt-outcomes-"))
         try:
-            self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_start, initargs=(make_objective,))
+            self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_start, initargs=(make_objective, self.outbox))
             for future in [self.pool.submit(_ready) for _ in range(workers)]:  # start every worker (and its world) now
                 future.result()
         except BaseException:
@@ -60,40 +70,48 @@ class WorkerPool:
             futures = [self.pool.submit(_evaluate, x, trial) for x, trial in points]
         except BrokenProcessPool:
             self.stop()
-            raise _died(points) from None
+            raise died(points) from None
 
         def wait() -> list[Outcome | str]:
             try:
-                return [future.result() for future in futures]
+                return [self.taken_back(future.result()) for future in futures]
             except BrokenProcessPool:
                 self.stop()
-                raise _died(points) from None
+                raise died(points) from None
             except BaseException:  # Ctrl-C: the trials in flight are lost, as with one worker
                 self.stop()
                 raise
 
         return wait
 
+    def taken_back(self, name: str) -> Outcome | str:
+        """The outcome a worker handed back in the file `name` (`_handed_back`), read once."""
+        path = self.outbox / name
+        try:
+            return pickle.loads(path.read_bytes())
+        finally:
+            path.unlink(missing_ok=True)
+
     def stop(self) -> None:
         """End the workers now (SIGTERM: each stops its executor command, if any, first)."""
         stop_children()
-        self.pool.shutdown(wait=True, cancel_futures=True)
+        self.close()
 
     def close(self) -> None:
-        self.pool.shutdown(wait=True, cancel_futures=True)
+        if hasattr(self, "pool"):
+            self.pool.shutdown(wait=True, cancel_futures=True)
+        shutil.rmtree(self.outbox, ignore_errors=True)
 
 
-def _died(points: list[tuple[np.ndarray, int]]) -> RunError:
+def died(points: list[tuple[np.ndarray, int]], what: str = "a worker process died (killed, or crashed)") -> RunError:
+    """The error that stops a run whose worker died running the trials `points`."""
     numbers = [trial for _, trial in points]
     trials = f"trial {numbers[0]}" if len(numbers) == 1 else f"trials {numbers[0]} to {numbers[-1]}"
-    return RunError(
-        f"a worker process died (killed, or crashed) while running {trials}; those trials are lost and the run stops here: "
-        f"continue it with the same command and {spelled('resume')}"
-    )
+    return RunError(f"{what} while running {trials}; those trials are lost and the run stops here: continue it with the same command and {spelled('resume')}")
 
 
-def _start(make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]]) -> None:
-    global _objective
+def _start(make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]], outbox: Path) -> None:
+    global _objective, _outbox
     import warnings
 
     stop_on_sigterm()
@@ -103,17 +121,30 @@ def _start(make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]]) -
     os.nice(WORKER_NICENESS)
     warnings.simplefilter("ignore")  # a worker has no terminal: tracking warnings would be lost
     _objective = make_objective()
+    _outbox = outbox
 
 
 def _ready() -> bool:
     return _objective is not None
 
 
-def _evaluate(x: np.ndarray, trial: int) -> Outcome | str:
+def _evaluate(x: np.ndarray, trial: int) -> str:
+    """In a worker: the name of the file holding the outcome of trial `trial` at `x`, or the
+    message of its error."""
     try:
-        return run_stoppable(_objective, x, trial)
+        outcome = run_stoppable(_objective, x, trial)
     except Exception as error:
-        return describe_error(error)
+        outcome = describe_error(error)
+    return _handed_back(outcome, trial)
+
+
+def _handed_back(outcome: Outcome | str, trial: int) -> str:
+    assert _outbox is not None
+    path = _outbox / f"trial-{trial}.pickle"
+    partial = path.with_suffix(".partial")
+    partial.write_bytes(pickle.dumps(outcome, protocol=pickle.HIGHEST_PROTOCOL))
+    partial.replace(path)
+    return path.name
 
 
 def stop_on_sigterm() -> None:

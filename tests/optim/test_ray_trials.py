@@ -1,0 +1,92 @@
+"""The trials of one run on a Ray cluster (`optimize --ray`): a local cluster of two nodes, one
+CPU each, so that the two workers' actors run on different nodes."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from stl_lfd.optim import finish_run, load_task, start_run
+from tests.optim.test_run import small_task
+from tests.processes import wait_for
+
+pytestmark = [pytest.mark.slow, pytest.mark.heavy]
+
+TRIALS = 6
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    from ray.cluster_utils import Cluster
+
+    cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 1, "include_dashboard": False})
+    cluster.add_node(num_cpus=1)
+    cluster.wait_for_nodes()
+    yield cluster
+    cluster.shutdown()
+
+
+@pytest.fixture(scope="module")
+def pybullet_task(tmp_path_factory, learned_model_file):
+    folder = tmp_path_factory.mktemp("ray")
+    path = small_task(folder, learned_model_file)
+    path.write_text(path.read_text().replace("backend: kinematic", "backend: pybullet").replace("initial: 3, trials: 5", f"initial: 2, trials: {TRIALS}"))
+    return path
+
+
+@pytest.fixture(scope="module")
+def local_trials(tmp_path_factory, pybullet_task):
+    """The same run with two local worker processes."""
+    out = tmp_path_factory.mktemp("local") / "run"
+    finish_run(start_run(load_task(pybullet_task).with_overrides(workers=2), out))
+    return trials_of(out)
+
+
+def trials_of(run: Path) -> list[dict]:
+    lines = [json.loads(line) for line in (run / "trials.jsonl").read_text().splitlines()]
+    return [{key: line[key] for key in ("trial", "x", "robustness", "status")} for line in lines]
+
+
+def optimize_on_ray(task: Path, out: Path, address: str) -> subprocess.Popen:
+    stlopt = str(Path(sys.executable).parent / "stlopt")
+    command = [stlopt, "optimize", str(task), "--out", str(out), "--workers", "2", "--ray", address, "--quiet"]
+    return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def evaluating_actors() -> list[int]:
+    """The processes of Ray actors in the middle of a trial (Ray titles them by the method)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        try:
+            command = (entry / "cmdline").read_bytes() if entry.name.isdigit() else b""
+        except OSError:
+            continue
+        if command.startswith(b"ray::TrialWorker.evaluate"):
+            found.append(int(entry.name))
+    return found
+
+
+def test_trials_on_a_two_node_cluster_equal_the_local_workers(tmp_path, cluster, pybullet_task, local_trials):
+    process = optimize_on_ray(pybullet_task, tmp_path / "run", cluster.address)
+    out, err = process.communicate(timeout=600)
+    assert process.returncode == 0, err
+    assert json.loads(out)["trials"] == TRIALS
+    assert trials_of(tmp_path / "run") == local_trials
+
+
+def test_a_worker_killed_mid_trial_has_its_trial_run_again_and_recorded_once(tmp_path, cluster, pybullet_task, local_trials):
+    process = optimize_on_ray(pybullet_task, tmp_path / "run", cluster.address)
+    trials = tmp_path / "run" / "trials.jsonl"
+    wait_for(lambda: trials.exists() and len(trials.read_text().splitlines()) >= 2 and evaluating_actors(), timeout=300)
+    killed = len(trials.read_text().splitlines())
+    os.kill(evaluating_actors()[0], signal.SIGKILL)
+    out, err = process.communicate(timeout=600)
+    print(err)
+    assert process.returncode == 0 and "Traceback" not in err, err
+    assert killed < TRIALS  # the kill came before the last trial was recorded
+    assert trials_of(tmp_path / "run") == local_trials  # nothing lost, nothing twice
+    assert all((tmp_path / "run" / "signals" / f"trial-{number:04d}.csv").is_file() for number in range(1, TRIALS + 1))
