@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run test test-fast lint docs bench bench-optim clean
+.PHONY: run test test-fast browser lint docs bench bench-optim clean
 
 # pip's output goes to $(VENV)/install.log (its tail is shown if it fails). torch comes first and
 # pinned: this version resolves to a CPU build.
@@ -37,11 +37,18 @@ run: $(STAMP)
 # busy to the end.
 PYTEST := OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 $(BIN)/python -m pytest -q -n 2 --dist loadgroup
 
-test: $(STAMP) lint docs
+test: $(STAMP) lint docs browser
 	$(PYTEST)
 
 test-fast: $(STAMP) lint docs
 	$(PYTEST) -m "not slow"
+
+# The dashboard's browser test drives Debian's Chromium: installed with apt-get when missing
+# (as root, as on CI; otherwise install the package chromium yourself).
+browser:
+	@command -v chromium > /dev/null || { echo "installing Debian's chromium for the dashboard's browser test ..."; \
+	  { apt-get install -y -qq chromium || { apt-get update -qq && apt-get install -y -qq chromium; }; } > /tmp/stlopt-apt.log 2>&1 || { \
+	  tail -n 5 /tmp/stlopt-apt.log; echo "could not install chromium: install Debian's package chromium, then run make test again"; exit 1; }; }
 
 lint: $(STAMP)
 	$(BIN)/ruff check stl_lfd tests benchmarks examples

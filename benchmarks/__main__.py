@@ -3,6 +3,7 @@
 from benchmarks import (
     bench_cli,
     bench_command,
+    bench_dashboard,
     bench_endpoint,
     bench_hsmm,
     bench_optim,
@@ -24,6 +25,7 @@ def main() -> None:
     bench_sim.main()
     bench_command.main([])
     bench_ray.main([])
+    bench_dashboard.main([])
     bench_optim.main([])
     bench_plan.main([])
     bench_tracking.main([])

@@ -10,7 +10,7 @@ the code of its class in `stl_lfd.errors`; usage errors exit 2.
     skills.py       stlopt learn, retrieve
     execution.py    stlopt rollout, replay
     runs.py         stlopt optimize, ask, tell, sweep
-    reports.py      stlopt report
+    reports.py      stlopt report, dashboard
 
 The command modules register their commands with `app` when imported, in the order `stlopt
 --help` lists them.

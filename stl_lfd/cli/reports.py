@@ -61,3 +61,35 @@ def _report_sweep(folder: Path, out: Optional[Path], run_options: bool) -> None:
         groups = sweep_groups(folder)
     print_table(TABLE_HEADER, table_rows(groups))
     print(f"wrote {figure}", file=sys.stderr)
+
+
+@app.command(cls=PlainUsage)
+def dashboard(
+    folder: Path = typer.Argument(Path("runs"), metavar="[RUNS_DIR]", help="The folder of runs and sweeps to show (default: runs)."),
+    host: str = typer.Option("127.0.0.1", "--host", help="The address to listen on (0.0.0.0: every network the machine is on)."),
+    port: int = typer.Option(8050, "--port", help="The port to listen on (0: any free one)."),
+) -> None:
+    """Show the runs and sweeps under a folder in the browser, live, until Ctrl-C.
+
+    The page lists the runs (their state, trials and best robustness) and sweeps; a run's page
+    shows its trials as they are recorded: robustness and the spec's parts over trials, the
+    latest and best paths with the spec's regions and the scene's objects, the signals the
+    spec constrains over time, tracking errors, and the trials an ask/tell run has handed out.
+    It only reads the run directories; everything it serves comes from installed packages.
+
+    Examples:
+
+    \b
+        stlopt dashboard                      # runs/, at http://127.0.0.1:8050/
+        stlopt dashboard runs/sweeps --port 8060
+        stlopt dashboard --host 0.0.0.0       # seen from the lab's other machines
+    """
+    with user_errors(on_interrupt="dashboard stopped"):
+        if not folder.is_dir():
+            raise ConfigError(f"{folder}: no such folder (the dashboard shows the runs under a folder, default runs/)")
+        from stl_lfd.dashboard.app import serve
+
+        try:
+            serve(folder, host, port, ready=lambda url: print(f"stlopt dashboard on {url} (Ctrl-C stops it)", file=sys.stderr, flush=True))
+        except OSError as error:
+            raise ConfigError(f"--host {host} --port {port}: cannot listen there ({error.strerror or error})") from None

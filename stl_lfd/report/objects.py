@@ -11,7 +11,7 @@ from matplotlib.patches import Polygon
 
 import stl_lfd.rotations as rotations
 from stl_lfd.report.run_data import RunData
-from stl_lfd.sim.scene import SceneObject
+from stl_lfd.sim.scene import Scene, SceneObject
 from stl_lfd.stl.thresholds import Threshold
 
 OBJECT_COLOR = "0.35"
@@ -44,8 +44,12 @@ def fixed_frame_objects(run: RunData) -> list[SceneObject]:
     """The fixed objects of the scene's frames (what a movable object is put into or taken
     from), at the run's placement; none when the run has several placements (the recorded
     signals are the worst placement's, which they do not name)."""
-    scene = run.scene
-    if scene is None or len(run.task.placements) > 1:
+    return fixed_objects(run.scene, len(run.task.placements))
+
+
+def fixed_objects(scene: Scene | None, placements: int) -> list[SceneObject]:
+    """The fixed objects of `scene`'s frames, when the run it belongs to has one placement."""
+    if scene is None or placements > 1:
         return []
     names = {name for frame in scene.frames for name in frame.objects}
     return [item for item in scene.objects if item.name in names and item.mass == 0]

@@ -105,12 +105,12 @@ def load_run(path: Path) -> RunData:
         constraints=region_constraints(spec),
         tracking=read_tracking(path),
         thresholds=signal_thresholds(spec),
-        scene=_placed_scene(task),
+        scene=placed_scene_of(task),
         missing_signals=missing,
     )
 
 
-def _placed_scene(task: Task) -> Scene | None:
+def placed_scene_of(task: Task) -> Scene | None:
     """The task's scene at its one placement, or as the scene file has it (with several
     placements, whose recorded signals are the worst placement's, or none); None when the scene
     cannot be loaded any more."""

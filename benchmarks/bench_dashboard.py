@@ -1,0 +1,109 @@
+"""The dashboard's costs on a folder of 100 runs (copies of one kinematic phi1 run): the time
+from starting `stlopt dashboard` to its first page, the server time of the first index (every
+run read), and the server time of a page update per new trial (a trial appended to one run:
+the run page's outputs and the index, each written as the JSON of Dash's response).
+
+    python -m benchmarks.bench_dashboard [--runs 100]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+from pathlib import Path
+
+from benchmarks._timing import Row, print_table
+
+ROOT = Path(__file__).resolve().parent.parent
+STLOPT = str(Path(sys.executable).parent / "stlopt")
+NEW_TRIALS = 20
+
+
+def one_run(folder: Path) -> Path:
+    run = folder / "source"
+    command = [STLOPT, "optimize", str(ROOT / "configs" / "phi1.yaml"), "--backend", "kinematic", "-N", "12", "-M", "4", "--out", str(run), "--quiet"]
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+    return run
+
+
+def start_up_seconds(folder: Path) -> float:
+    """From starting the command to the first answer of its page."""
+    start = time.perf_counter()
+    process = subprocess.Popen([STLOPT, "dashboard", str(folder), "--port", "0"], stderr=subprocess.PIPE, text=True)
+    try:
+        url = re.search(r"http://\S+/", process.stderr.readline()).group(0)
+        urllib.request.urlopen(url, timeout=30).read()
+        return time.perf_counter() - start
+    finally:
+        process.terminate()
+        process.wait()
+
+
+def appended(run: Path, number: int) -> None:
+    """Trial `number` appended to `run`, as a run records it: its signals, then its line."""
+    last = json.loads((run / "trials.jsonl").read_text().splitlines()[-1])
+    shutil.copy(run / "signals" / f"trial-{last['trial']:04d}.csv", run / "signals" / f"trial-{number:04d}.csv")
+    with open(run / "trials.jsonl", "a") as stream:
+        stream.write(json.dumps(last | {"trial": number}) + "\n")
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=100)
+    arguments = parser.parse_args(argv)
+    from stl_lfd.dashboard.app import REFRESH_SECONDS, Dashboard
+    from dash._utils import to_json  # how Dash writes a callback's response
+
+    from stl_lfd.dashboard.pages import index_content, index_signature, run_outputs
+
+    with tempfile.TemporaryDirectory() as scratch:
+        source = one_run(Path(scratch))
+        folder = Path(scratch) / "runs"
+        for index in range(arguments.runs):
+            shutil.copytree(source, folder / f"run-{index:03d}")
+        start_up = start_up_seconds(folder)
+        board = Dashboard(folder)
+        start = time.perf_counter()
+        index_content(board, *index_signature(board)[:2])
+        first_index = time.perf_counter() - start
+        watched = folder / "run-000"
+        run_outputs(board, watched)  # the page as first drawn
+        page_updates, index_updates = [], []
+        for number in range(13, 13 + NEW_TRIALS):
+            appended(watched, number)
+            start = time.perf_counter()
+            outputs = run_outputs(board, watched, board.views[watched].version)
+            to_json(outputs)
+            page_updates.append(time.perf_counter() - start)
+            assert outputs is not None and len(board.views[watched].trials) == number
+            start = time.perf_counter()
+            to_json(index_content(board, *index_signature(board)[:2]))
+            index_updates.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        for _ in range(10):
+            index_signature(board)
+        unchanged = (time.perf_counter() - start) / 10
+    runs = f"{arguments.runs} runs"
+    print_table(
+        f"Dashboard ({runs} of 12 kinematic phi1 trials; update: {NEW_TRIALS} trials appended to one run, median)",
+        [
+            Row(
+                "start-up: command to the listed runs", runs, start_up + first_index, 2.0, f"first page {start_up:.2f} s, then the listing {first_index:.2f} s"
+            ),
+            Row("run page update per new trial", "1 run", statistics.median(page_updates), 0.05, f"max {max(page_updates) * 1000:.0f} ms"),
+            Row("index update per new trial", runs, statistics.median(index_updates), 0.05, f"max {max(index_updates) * 1000:.0f} ms"),
+            Row("index refresh, nothing new", runs, unchanged, None, f"every {REFRESH_SECONDS} s while the index is open"),
+        ],
+    )
+
+
+if __name__ == "__main__":
+    main()

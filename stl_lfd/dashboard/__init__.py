@@ -1,0 +1,9 @@
+"""`stlopt dashboard`: a live, read-only view of a folder of runs and sweeps in the browser.
+
+- `folder`: the run directories and sweep folders under a folder (`find`), and each run as it
+  grows (`RunView`: new trials read incrementally, the run's state), without writing or locking.
+- `figures`: the run's figures as Plotly figure dictionaries (robustness and the spec's parts
+  over trials, paths with the spec's regions and the scene's objects, signals over time).
+- `app`: the Dash application (pages for the folder, a run and a sweep, refreshed every half
+  second) and `serve`.
+"""

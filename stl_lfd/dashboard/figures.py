@@ -1,0 +1,209 @@
+"""A run's figures on the dashboard, as Plotly figure dictionaries (built without plotly's
+figure classes, which cost more than the data): robustness over trials, the spec's parts over
+trials, the latest and best paths with the spec's regions and the scene's objects, the signals
+the spec constrains over time with its thresholds, and how the robot tracked its references."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from stl_lfd.dashboard.folder import RunView
+from stl_lfd.signals import SignalTable, read_signal_csv
+
+Figure = dict[str, Any]
+MAX_POINTS = 600  # samples of a drawn signal: enough for the eye, cheap to send
+TIME_SIGNALS = ("force", "tilt", "shaft_tilt", "shaft_depth", "shaft_offset")  # drawn over time when recorded or constrained
+LATEST, BEST = "#1f77b4", "#d62728"
+
+
+def _layout(title: str, **more: Any) -> dict[str, Any]:
+    return {"title": {"text": title, "font": {"size": 14}}, "margin": {"l": 50, "r": 10, "t": 36, "b": 40}, "uirevision": "keep", **more}
+
+
+def robustness_figure(view: RunView) -> Figure:
+    """Each trial's robustness, the best so far, zero and the unoptimised skill's."""
+    numbers = [trial["trial"] for trial in view.trials]
+    values = [trial.get("robustness") for trial in view.trials]
+    best, best_so_far = None, []
+    for value in values:
+        best = value if value is not None and (best is None or value > best) else best
+        best_so_far.append(best)
+    data = [
+        {"type": "scatter", "mode": "markers", "name": "trial", "x": numbers, "y": values, "marker": {"color": LATEST}},
+        {"type": "scatter", "mode": "lines", "name": "best so far", "x": numbers, "y": best_so_far, "line": {"color": BEST, "shape": "hv"}},
+    ]
+    shapes = [{"type": "line", "xref": "paper", "x0": 0, "x1": 1, "y0": 0, "y1": 0, "line": {"color": "black", "width": 1}}]
+    initial = view.summary.get("initial_robustness")
+    if isinstance(initial, (int, float)):
+        shapes.append({"type": "line", "xref": "paper", "x0": 0, "x1": 1, "y0": initial, "y1": initial, "line": {"color": "gray", "dash": "dot"}})
+    return {"data": data, "layout": _layout("robustness (dotted: unoptimised; above 0: satisfied)", shapes=shapes, xaxis={"title": {"text": "trial"}})}
+
+
+def parts_figure(view: RunView) -> Figure:
+    """The robustness of each top-level part of the spec, trial by trial."""
+    names: list[str] = []
+    for trial in view.trials:
+        names.extend(name for name in trial.get("components") or {} if name not in names)
+    numbers = [trial["trial"] for trial in view.trials]
+    data = [
+        {"type": "scatter", "mode": "lines+markers", "name": name, "x": numbers, "y": [(trial.get("components") or {}).get(name) for trial in view.trials]}
+        for name in names
+    ]
+    return {"data": data, "layout": _layout("the spec's parts", xaxis={"title": {"text": "trial"}})}
+
+
+def drawn_trials(view: RunView) -> dict[str, int]:
+    """The trials whose executions are drawn: `latest` and `best` (0: the unoptimised skill)."""
+    best = view.best()
+    latest = view.trials[-1]["trial"] if view.trials else 0
+    return {"latest": latest, "best": best["trial"] if best is not None else 0}
+
+
+@lru_cache(maxsize=256)
+def _signals(path: Path, stamp: float) -> SignalTable | None:
+    try:
+        return read_signal_csv(path)
+    except Exception:  # a signal file being replaced, or damaged: drawn without it
+        return None
+
+
+def signals_of(view: RunView, trial: int) -> SignalTable | None:
+    path = view.signals_path(trial)
+    try:
+        return _signals(path, path.stat().st_mtime)
+    except OSError:
+        return None
+
+
+def _thinned(values: np.ndarray) -> list[float]:
+    step = max(1, len(values) // MAX_POINTS)
+    return np.round(values[::step], 5).tolist()
+
+
+def paths_figure(view: RunView, regions: dict[str, dict[str, tuple[float, float]]], outlines: list[np.ndarray]) -> Figure:
+    """Seen from above: the hand's path in the latest and the best trial, a moved object's path
+    (dashed), the spec's regions and the outlines of the scene's objects."""
+    data = []
+    for label, trial in drawn_trials(view).items():
+        table = signals_of(view, trial)
+        if table is None or "x" not in table.columns or "y" not in table.columns:
+            continue
+        color = LATEST if label == "latest" else BEST
+        data.append(
+            {
+                "type": "scatter",
+                "mode": "lines",
+                "name": f"{label} (trial {trial})",
+                "x": _thinned(table.columns["x"]),
+                "y": _thinned(table.columns["y"]),
+                "line": {"color": color},
+            }
+        )
+        for name in [column[: -len("_x")] for column in table.columns if column.endswith("_x") and f"{column[:-2]}_y" in table.columns]:
+            data.append(
+                {"type": "scatter", "mode": "lines", "name": f"{name}, {label}", "x": _thinned(table.columns[f"{name}_x"]),
+                 "y": _thinned(table.columns[f"{name}_y"]), "line": {"color": color, "dash": "dash"}}
+            )  # fmt: skip
+    shapes = [
+        {
+            "type": "rect",
+            "x0": box["x"][0],
+            "x1": box["x"][1],
+            "y0": box["y"][0],
+            "y1": box["y"][1],
+            "line": {"color": "green"},
+            "fillcolor": "rgba(0,160,0,0.12)",
+        }
+        for box in regions.values()
+        if "x" in box and "y" in box
+    ]
+    annotations = [
+        {"x": (box["x"][0] + box["x"][1]) / 2, "y": box["y"][1], "text": name, "showarrow": False, "yshift": 8}
+        for name, box in regions.items()
+        if "x" in box and "y" in box
+    ]
+    for outline in outlines:
+        closed = np.vstack([outline, outline[:1]])
+        data.append(
+            {
+                "type": "scatter",
+                "mode": "lines",
+                "showlegend": False,
+                "hoverinfo": "skip",
+                "x": closed[:, 0].tolist(),
+                "y": closed[:, 1].tolist(),
+                "line": {"color": "gray"},
+            }
+        )
+    layout = _layout("paths seen from above (green: the spec's regions)", shapes=shapes, annotations=annotations, xaxis={"title": {"text": "x (m)"}})
+    layout["yaxis"] = {"title": {"text": "y (m)"}, "scaleanchor": "x"}
+    return {"data": data, "layout": layout}
+
+
+def time_signals(view: RunView, thresholds: dict[str, list[Any]]) -> list[str]:
+    """The signals drawn over time: those the spec constrains, then force and tilts where they
+    vary (a kinematic rollout records them as zeros)."""
+    table = signals_of(view, drawn_trials(view)["latest"])
+    if table is None:
+        return []
+    names = [name for name in thresholds if name in table.columns and name not in ("x", "y", "z")]
+    varying = [name for name in TIME_SIGNALS if name in table.columns and np.ptp(table.columns[name]) > 0]
+    return names + [name for name in varying if name not in names]
+
+
+def signals_figure(view: RunView, thresholds: dict[str, list[Any]]) -> Figure:
+    """The signals of `time_signals` over time, one panel each, in the latest and the best
+    trial, with the values the spec compares them with (dashed)."""
+    names = time_signals(view, thresholds)
+    data, shapes, layout = [], [], _layout("signals over time (dashed: the spec's thresholds)", height=max(240, 160 * len(names)))
+    for index, name in enumerate(names):
+        axis = "" if index == 0 else str(index + 1)
+        low, high = 1 - (index + 1) / len(names), 1 - index / len(names)
+        layout[f"yaxis{axis}"] = {"title": {"text": name}, "domain": [low + 0.04, high - 0.04], "anchor": f"x{axis}"}
+        layout[f"xaxis{axis}"] = {"anchor": f"y{axis}", "matches": "x" if index else None, "showticklabels": index == len(names) - 1}
+        for label, trial in drawn_trials(view).items():
+            table = signals_of(view, trial)
+            if table is None or name not in table.columns:
+                continue
+            color = LATEST if label == "latest" else BEST
+            data.append(
+                {"type": "scatter", "mode": "lines", "name": f"{label} (trial {trial})", "legendgroup": label, "showlegend": index == 0,
+                 "x": _thinned(table.times), "y": _thinned(table.columns[name]), "xaxis": f"x{axis}", "yaxis": f"y{axis}", "line": {"color": color}}
+            )  # fmt: skip
+        for threshold in thresholds.get(name, []):
+            shapes.append(
+                {
+                    "type": "line",
+                    "xref": f"x{axis} domain",
+                    "yref": f"y{axis}",
+                    "x0": 0,
+                    "x1": 1,
+                    "y0": threshold.value,
+                    "y1": threshold.value,
+                    "line": {"dash": "dash", "color": "gray"},
+                }
+            )
+    layout["shapes"] = shapes
+    return {"data": data, "layout": layout}
+
+
+def tracking_figure(view: RunView) -> Figure | None:
+    """The RMS error of the plan and of the learned tracking model as predictions of each
+    execution (`tracking.json`), when the run learned how its robot tracks."""
+    from stl_lfd.optim.tracking import TRACKING_FILE, read_tracking
+
+    if not (view.path / TRACKING_FILE).is_file():
+        return None
+    record = read_tracking(view.path)
+    if record is None or not record.errors:
+        return None
+    numbers = sorted(record.errors)
+    data = [
+        {"type": "scatter", "mode": "lines+markers", "name": name, "x": numbers, "y": [1000 * record.errors[number][column] for number in numbers]}
+        for column, name in ((0, "plan"), (1, "tracking model"))
+    ]
+    return {"data": data, "layout": _layout("tracking: RMS error of the prediction of each execution (mm)", xaxis={"title": {"text": "trial"}})}

@@ -1,0 +1,221 @@
+"""The runs and sweeps under a folder, and each run as it grows, read without writing or locking.
+
+A run directory is a folder holding `task.yaml`; a sweep folder holds `sweep.yaml` and its
+runs in `runs/`. `RunView.refresh` costs a few `stat` calls when nothing changed, and reads
+only the lines appended to `trials.jsonl` since the last refresh. Whatever it cannot read (a
+half-written line, a file that is not JSON, a run directory that is not one) becomes the run's
+`problem`, shown on the page: the dashboard never fails on a damaged run.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from stl_lfd.optim.runs.directory import PENDING_FILE, SIGNALS_DIR, SUMMARY_FILE, TASK_FILE, TRIALS_FILE
+from stl_lfd.optim.runs.lock import LOCK_FILE
+
+SWEEP_FILE = "sweep.yaml"
+SWEEP_RUNS = "runs"
+WATCHED = (TRIALS_FILE, SUMMARY_FILE, PENDING_FILE, LOCK_FILE)  # a change to any is an update
+MAX_DEPTH = 3  # how deep under the folder runs and sweeps are looked for
+
+
+@dataclass(frozen=True)
+class Listing:
+    """The run directories and sweep folders under a folder (a sweep's runs are its own)."""
+
+    runs: tuple[Path, ...]
+    sweeps: tuple[Path, ...]
+
+
+def find(folder: Path, depth: int = MAX_DEPTH) -> Listing:
+    """The runs and sweeps under `folder` (itself included), sorted by path."""
+    runs: list[Path] = []
+    sweeps: list[Path] = []
+
+    def visit(path: Path, level: int) -> None:
+        if (path / SWEEP_FILE).is_file():
+            sweeps.append(path)
+        elif (path / TASK_FILE).is_file():
+            runs.append(path)
+        elif level < depth:
+            try:
+                children = sorted(entry.path for entry in os.scandir(path) if entry.is_dir() and not entry.name.startswith("."))
+            except OSError:
+                return
+            for child in children:
+                visit(Path(child), level + 1)
+
+    visit(Path(folder), 0)
+    return Listing(tuple(sorted(runs)), tuple(sorted(sweeps)))
+
+
+def sweep_runs(sweep: Path) -> list[Path]:
+    """The finished cells of a sweep folder (a cell's run directory appears when complete)."""
+    return find(sweep / SWEEP_RUNS, depth=1).runs
+
+
+@dataclass
+class RunView:
+    """A run directory as the dashboard last read it.
+
+    Attributes:
+        trials: the records of `trials.jsonl` read so far (dictionaries, as written).
+        summary: `summary.json`, or {} before it exists.
+        task: `task.yaml`, or {}.
+        pending: the entries of `pending.json` (trials handed out and not recorded).
+        problem: what is wrong with the run directory ("" when nothing).
+        version: grows by one at every refresh that found a change.
+    """
+
+    path: Path
+    trials: list[dict[str, Any]] = field(default_factory=list)
+    summary: dict[str, Any] = field(default_factory=dict)
+    task: dict[str, Any] = field(default_factory=dict)
+    pending: list[dict[str, Any]] = field(default_factory=list)
+    problem: str = ""
+    version: int = 0
+    _offset: int = 0
+    _stamp: tuple = ()
+
+    def refresh(self) -> bool:
+        """Read what changed since the last refresh; whether anything did."""
+        stamp = tuple(_stat(self.path / name) for name in WATCHED)
+        if stamp == self._stamp and self.version > 0:
+            return False
+        self._stamp = stamp
+        self.problem = ""
+        try:
+            self._read()
+        except (OSError, ValueError, yaml.YAMLError) as error:
+            self.problem = str(error) or type(error).__name__
+        self.version += 1
+        return True
+
+    def _read(self) -> None:
+        if not self.task:
+            self.task = _mapping(yaml.safe_load((self.path / TASK_FILE).read_text()), TASK_FILE)
+        self.summary = _json_file(self.path / SUMMARY_FILE, {})
+        pending = _json_file(self.path / PENDING_FILE, {"pending": []})
+        self.pending = pending.get("pending", []) if "pending" in pending else [pending]
+        self._read_new_trials()
+
+    def _read_new_trials(self) -> None:
+        path = self.path / TRIALS_FILE
+        if not path.is_file():
+            return
+        with open(path, "rb") as stream:
+            if os.fstat(stream.fileno()).st_size < self._offset:  # rewritten from the start (another run moved in)
+                self.trials, self._offset = [], 0
+            stream.seek(self._offset)
+            data = stream.read()
+        complete = data[: data.rfind(b"\n") + 1]  # a line still being written waits for the next refresh
+        for number, line in enumerate(complete.splitlines(), start=len(self.trials) + 1):
+            try:
+                record = json.loads(line)
+            except json.JSONDecodeError:
+                record = None
+            if not isinstance(record, dict) or "trial" not in record:
+                raise ValueError(f"{TRIALS_FILE} line {number}: not a trial record")
+            self.trials.append(record)
+            self._offset += len(line) + 1
+
+    @property
+    def name(self) -> str:
+        return str(self.task.get("name") or self.path.name)
+
+    @property
+    def budget(self) -> int | None:
+        budget = self.summary.get("budget") or (self.task.get("optimizer") or {}).get("trials")
+        return int(budget) if isinstance(budget, (int, float)) else None
+
+    def best(self) -> dict[str, Any] | None:
+        scored = [trial for trial in self.trials if isinstance(trial.get("robustness"), (int, float))]
+        return max(scored, key=lambda trial: trial["robustness"]) if scored else None
+
+    def writer(self) -> int | None:
+        """The PID of the stlopt process writing the run, if one is: the holder of the lock on
+        its `.lock` file (`RunLock`), as the kernel lists it, never taken here."""
+        try:
+            status = (self.path / LOCK_FILE).stat()
+        except OSError:
+            return None
+        return held_locks().get((os.major(status.st_dev), os.minor(status.st_dev), status.st_ino))
+
+    def state(self) -> str:
+        """`damaged: ...`, `running`, `waiting for tell: trial N`, `finished` or `stopped after N of M trials`."""
+        if self.problem:
+            return f"damaged: {self.problem}"
+        if self.writer() is not None:
+            return "running"
+        waiting = [entry for entry in self.pending if not entry.get("told")]
+        if waiting:
+            return "waiting for tell: " + ", ".join(f"trial {entry.get('trial')}" + (f" ({entry['robot']})" if entry.get("robot") else "") for entry in waiting)
+        if self.summary.get("complete"):
+            return "finished"
+        return f"stopped after {len(self.trials)} of {self.budget} trials" if self.budget else "stopped"
+
+    def signals_path(self, trial: int) -> Path:
+        return self.path / SIGNALS_DIR / ("initial.csv" if trial == 0 else f"trial-{trial:04d}.csv")
+
+    def spec_path(self) -> Path | None:
+        spec = self.task.get("spec")
+        return (self.path / spec).resolve() if isinstance(spec, str) else None
+
+
+_locks: tuple[float, dict[tuple[int, int, int], int]] = (0.0, {})
+
+
+def held_locks(max_age: float = 0.2) -> dict[tuple[int, int, int], int]:
+    """(device major, minor, inode) -> PID of every `flock` lock held on this machine, from
+    Linux's /proc/locks (read at most every `max_age` seconds); empty elsewhere."""
+    global _locks
+    if time.monotonic() - _locks[0] > max_age:
+        held = {}
+        try:
+            lines = Path("/proc/locks").read_text().splitlines()
+        except OSError:
+            lines = []
+        for line in lines:
+            fields = line.split()
+            if len(fields) > 5 and fields[1] == "FLOCK" and fields[4].isdigit():
+                major, minor, inode = fields[5].split(":")
+                held[(int(major, 16), int(minor, 16), int(inode))] = int(fields[4])
+        _locks = (time.monotonic(), held)
+    return _locks[1]
+
+
+def _stat(path: Path) -> tuple[int, int]:
+    try:
+        status = path.stat()
+    except OSError:
+        return (-1, -1)
+    return (status.st_size, status.st_mtime_ns)
+
+
+def _json_file(path: Path, missing: dict[str, Any]) -> dict[str, Any]:
+    if not path.is_file():
+        return missing
+    try:
+        return _mapping(json.loads(path.read_text()), path.name)
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{path.name} line {error.lineno}: not JSON ({error.msg})") from None
+
+
+def _mapping(data: Any, name: str) -> dict[str, Any]:
+    if not isinstance(data, dict):
+        raise ValueError(f"{name}: not a mapping")
+    return data
+
+
+def age(seconds_since_epoch: float) -> str:
+    """`5 s ago`, `3 min ago`, `2 h ago`."""
+    elapsed = max(0.0, time.time() - seconds_since_epoch)
+    return f"{elapsed:.0f} s ago" if elapsed < 120 else f"{elapsed / 60:.0f} min ago" if elapsed < 7200 else f"{elapsed / 3600:.0f} h ago"

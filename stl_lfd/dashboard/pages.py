@@ -1,0 +1,216 @@
+"""The dashboard's pages (the folder, a run, a sweep) and the callbacks that keep them live.
+
+Each page holds its own `dcc.Interval`, so that only the shown page's callback runs; a callback
+compares the versions of the runs it shows with those the page last drew (a `dcc.Store`) and
+answers "no update" when they are the same.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+from dash import Input, Output, State, dcc, html
+from dash.exceptions import PreventUpdate
+
+from stl_lfd.dashboard import figures
+from stl_lfd.dashboard.app import REFRESH_SECONDS, RUN_PREFIX, SWEEP_PREFIX, Dashboard
+from stl_lfd.dashboard.folder import RunView, age, find, sweep_runs
+
+GRAPH_STYLE = {"height": "340px"}
+CELL = {"padding": "2px 12px", "textAlign": "left"}
+
+
+def _tick(name: str) -> dcc.Interval:
+    return dcc.Interval(id=f"{name}-tick", interval=int(REFRESH_SECONDS * 1000))
+
+
+def _table(header: list[str], rows: list[list[Any]], table_id: str) -> html.Table:
+    return html.Table(
+        [html.Thead(html.Tr([html.Th(cell, style=CELL) for cell in header]))]
+        + [html.Tbody([html.Tr([html.Td(cell, style=CELL) for cell in row]) for row in rows])],
+        id=table_id,
+    )
+
+
+def _best_text(view: RunView) -> str:
+    best = view.best()
+    if best is None:
+        return "-"
+    return f"{best['robustness']:+.5f} (trial {best['trial']}, {'satisfied' if best['robustness'] > 0 else 'violated'})"
+
+
+def _run_row(board: Dashboard, view: RunView, prefix: str = RUN_PREFIX) -> list[Any]:
+    """A run's row in a table of runs, built again only when the run changed."""
+    key = (view.version, view.writer())
+    cached = board.rows.get(view.path)
+    if cached is None or cached[0] != key:
+        budget = f" of {view.budget}" if view.budget else ""
+        link = dcc.Link(view.name, href=board.address(prefix, view.path))
+        row = [link, str(view.path.relative_to(board.folder)), view.state(), f"{len(view.trials)}{budget}", _best_text(view)]
+        board.rows[view.path] = cached = (key, row)
+    return cached[1]
+
+
+def index_page(board: Dashboard) -> html.Div:
+    return html.Div([html.H2(f"stlopt dashboard: {board.folder.name}/"), _tick("index"), dcc.Store(id="index-seen"), html.Div(id="index-content")])
+
+
+def index_signature(board: Dashboard) -> tuple[list[Path], list[Path], list]:
+    """The folder's runs and sweeps, and what the index shows changes with: their paths, the
+    runs' versions and writers, and the sweeps' finished cells."""
+    listing = find(board.folder)
+    views = [board.view(path) for path in listing.runs]
+    cells = [len(sweep_runs(path)) for path in listing.sweeps]
+    signature = [str(path) for path in listing.runs + listing.sweeps] + [[view.version, view.writer()] for view in views] + cells
+    return list(listing.runs), list(listing.sweeps), signature
+
+
+def index_content(board: Dashboard, runs: list[Path], sweeps: list[Path]) -> list[Any]:
+    views = [board.views[path] for path in runs]
+    sweep_rows = [
+        [dcc.Link(path.name, href=board.address(SWEEP_PREFIX, path)), str(path.relative_to(board.folder)), f"{len(sweep_runs(path))} runs finished"]
+        for path in sweeps
+    ]
+    return [
+        html.H3("Runs"),
+        _table(["run", "folder", "state", "trials", "best robustness"], [_run_row(board, view) for view in views], "runs")
+        if views
+        else html.P("no run directories here yet"),
+        html.H3("Sweeps"),
+        _table(["sweep", "folder", "cells"], sweep_rows, "sweeps") if sweep_rows else html.P("no sweeps here"),
+    ]
+
+
+def run_page(board: Dashboard, path: Path) -> html.Div:
+    graphs = [dcc.Graph(id=name, style=GRAPH_STYLE, config={"displaylogo": False}) for name in ("robustness", "parts", "paths")]
+    return html.Div(
+        [
+            dcc.Link("all runs", href="/"),
+            html.H2(path.name, id="run-title"),
+            dcc.Store(id="run-path", data=str(path)),
+            dcc.Store(id="run-seen"),
+            _tick("run"),
+            html.Div(id="run-status"),
+            html.Div(id="run-pending"),
+            html.Div(graphs[:2], style={"display": "grid", "gridTemplateColumns": "1fr 1fr"}),
+            html.Div([graphs[2], dcc.Graph(id="signals", config={"displaylogo": False})], style={"display": "grid", "gridTemplateColumns": "1fr 1fr"}),
+            html.Div(dcc.Graph(id="tracking", style=GRAPH_STYLE), id="tracking-box", style={"display": "none"}),
+        ]
+    )
+
+
+def run_status(view: RunView) -> html.Div:
+    summary = view.summary
+    budget = f" of {view.budget}" if view.budget else ""
+    facts = [
+        ("state", view.state()),
+        ("trials", f"{len(view.trials)}{budget}"),
+        ("best", _best_text(view)),
+        ("unoptimised", f"{summary['initial_robustness']:+.5f}" if isinstance(summary.get("initial_robustness"), (int, float)) else "-"),
+        ("spec", str(view.task.get("spec", "-"))),
+        ("method", str((view.task.get("optimizer") or {}).get("method", "-"))),
+        ("backend", str(view.task.get("backend", "-"))),
+    ]
+    return html.Div([html.Span([html.B(f"{name}: "), html.Span(value, id=f"run-{name}"), "   "]) for name, value in facts])
+
+
+def run_pending(view: RunView) -> Any:
+    waiting = [entry for entry in view.pending if not entry.get("told")]
+    if not waiting:
+        return None
+    rows = []
+    for entry in waiting:
+        trial = entry.get("trial")
+        reference = view.path / "executions" / (f"trial-{trial:04d}" if isinstance(trial, int) and trial else "initial") / "reference.csv"
+        asked = entry.get("asked")
+        rows.append(
+            [
+                str(trial),
+                entry.get("robot") or "-",
+                age(asked) if isinstance(asked, (int, float)) else "-",
+                str(reference.relative_to(view.path)) if reference.is_file() else "-",
+            ]
+        )
+    return html.Div([html.H3("Handed out, waiting for tell"), _table(["trial", "robot", "asked", "reference"], rows, "pending")])
+
+
+def run_outputs(board: Dashboard, path: Path, seen: Any = None) -> tuple | None:
+    """What the run page shows of the run at `path` (the outputs of its callback), or None when
+    the page shows its version `seen` already."""
+    view = board.view(path)
+    if seen == view.version:
+        return None
+    extras = board.extras_of(view)
+    tracking = figures.tracking_figure(view) if not view.problem else None
+    return (
+        run_status(view), run_pending(view), figures.robustness_figure(view), figures.parts_figure(view),
+        figures.paths_figure(view, extras.regions, extras.outlines), figures.signals_figure(view, extras.thresholds),
+        tracking or {}, {"display": "block" if tracking else "none"}, view.version,
+    )  # fmt: skip
+
+
+def sweep_page(board: Dashboard, path: Path) -> html.Div:
+    return html.Div(
+        [
+            dcc.Link("all runs", href="/"),
+            html.H2(f"sweep {path.name}"),
+            dcc.Store(id="sweep-path", data=str(path)),
+            dcc.Store(id="sweep-seen"),
+            _tick("sweep"),
+            html.Div(id="sweep-content"),
+        ]
+    )
+
+
+def register(app: Any, board: Dashboard) -> None:
+    """The callbacks of the pages."""
+
+    @app.callback(Output("page", "children"), Input("url", "pathname"))
+    def route(pathname: str | None) -> Any:
+        pathname = pathname or "/"
+        for prefix, page in ((RUN_PREFIX, run_page), (SWEEP_PREFIX, sweep_page)):
+            if pathname.startswith(prefix):
+                path = board.resolve(pathname[len(prefix) :])
+                if path is None or not path.is_dir():
+                    return html.Div([dcc.Link("all runs", href="/"), html.P(f"no such folder here: {pathname[len(prefix) :]}")])
+                return page(board, path)
+        return index_page(board)
+
+    @app.callback(Output("index-content", "children"), Output("index-seen", "data"), Input("index-tick", "n_intervals"), State("index-seen", "data"))
+    def refresh_index(_: int, seen: Any) -> Any:
+        runs, sweeps, signature = index_signature(board)
+        if signature == seen:
+            raise PreventUpdate
+        return index_content(board, runs, sweeps), signature
+
+    @app.callback(
+        Output("run-status", "children"), Output("run-pending", "children"), Output("robustness", "figure"), Output("parts", "figure"),
+        Output("paths", "figure"), Output("signals", "figure"), Output("tracking", "figure"), Output("tracking-box", "style"), Output("run-seen", "data"),
+        Input("run-tick", "n_intervals"), State("run-path", "data"), State("run-seen", "data"),
+    )  # fmt: skip
+    def refresh_run(_: int, path: str, seen: Any) -> Any:
+        outputs = run_outputs(board, Path(path), seen)
+        if outputs is None:
+            raise PreventUpdate
+        return outputs
+
+    @app.callback(
+        Output("sweep-content", "children"),
+        Output("sweep-seen", "data"),
+        Input("sweep-tick", "n_intervals"),
+        State("sweep-path", "data"),
+        State("sweep-seen", "data"),
+    )
+    def refresh_sweep(_: int, path: str, seen: Any) -> Any:
+        views = [board.view(run) for run in sweep_runs(Path(path))]
+        signature = [str(view.path) for view in views] + [view.version for view in views]
+        if signature == seen:
+            raise PreventUpdate
+        rows = [_run_row(board, view) for view in views]
+        started = time.strftime("%Y-%m-%d %H:%M", time.localtime(Path(path).stat().st_mtime))
+        return [
+            html.P(f"{len(views)} runs finished (folder changed {started})"),
+            _table(["run", "folder", "state", "trials", "best robustness"], rows, "cells"),
+        ], signature
