@@ -59,9 +59,9 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=100)
     arguments = parser.parse_args(argv)
-    from stl_lfd.dashboard.app import REFRESH_SECONDS, Dashboard
     from dash._utils import to_json  # how Dash writes a callback's response
 
+    from stl_lfd.dashboard.board import REFRESH_SECONDS, Dashboard
     from stl_lfd.dashboard.pages import index_content, index_signature, run_outputs
 
     with tempfile.TemporaryDirectory() as scratch:
@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> None:
         for number in range(13, 13 + NEW_TRIALS):
             appended(watched, number)
             start = time.perf_counter()
-            outputs = run_outputs(board, watched, board.views[watched].version)
+            outputs = run_outputs(board, watched, [board.views[watched].version, False])
             to_json(outputs)
             page_updates.append(time.perf_counter() - start)
             assert outputs is not None and len(board.views[watched].trials) == number

@@ -4,6 +4,9 @@
   grows (`RunView`: new trials read incrementally, the run's state), without writing or locking.
 - `figures`: the run's figures as Plotly figure dictionaries (robustness and the spec's parts
   over trials, paths with the spec's regions and the scene's objects, signals over time).
+- `board`: the server's state: a `RunView` per run shown, and each run's regions, thresholds
+  and object outlines, read once.
+- `pages`: the pages (the folder, a run, a sweep) and the callbacks that keep them live.
 - `app`: the Dash application (pages for the folder, a run and a sweep, refreshed every half
   second) and `serve`.
 """

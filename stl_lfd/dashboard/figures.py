@@ -188,6 +188,9 @@ def signals_figure(view: RunView, thresholds: dict[str, list[Any]]) -> Figure:
                 }
             )
     layout["shapes"] = shapes
+    if not names:
+        note = {"text": "no force, tilt or object signal varies in these executions", "showarrow": False, "xref": "paper", "yref": "paper", "x": 0.5, "y": 0.5}
+        layout.update(annotations=[note], xaxis={"visible": False}, yaxis={"visible": False})
     return {"data": data, "layout": layout}
 
 

@@ -15,7 +15,7 @@ from dash import Input, Output, State, dcc, html
 from dash.exceptions import PreventUpdate
 
 from stl_lfd.dashboard import figures
-from stl_lfd.dashboard.app import REFRESH_SECONDS, RUN_PREFIX, SWEEP_PREFIX, Dashboard
+from stl_lfd.dashboard.board import REFRESH_SECONDS, RUN_PREFIX, SWEEP_PREFIX, Dashboard
 from stl_lfd.dashboard.folder import RunView, age, find, sweep_runs
 
 GRAPH_STYLE = {"height": "340px"}
@@ -138,16 +138,18 @@ def run_pending(view: RunView) -> Any:
 
 def run_outputs(board: Dashboard, path: Path, seen: Any = None) -> tuple | None:
     """What the run page shows of the run at `path` (the outputs of its callback), or None when
-    the page shows its version `seen` already."""
+    the page shows it as it is already (`seen`: the run's version, and whether it was being
+    written: a run's writer ends without changing a file)."""
     view = board.view(path)
-    if seen == view.version:
+    shown = [view.version, view.writer() is not None]
+    if seen == shown:
         return None
     extras = board.extras_of(view)
     tracking = figures.tracking_figure(view) if not view.problem else None
     return (
         run_status(view), run_pending(view), figures.robustness_figure(view), figures.parts_figure(view),
         figures.paths_figure(view, extras.regions, extras.outlines), figures.signals_figure(view, extras.thresholds),
-        tracking or {}, {"display": "block" if tracking else "none"}, view.version,
+        tracking or {}, {"display": "block" if tracking else "none"}, shown,
     )  # fmt: skip
 
 

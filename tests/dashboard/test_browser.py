@@ -98,7 +98,7 @@ def test_a_run_being_extended_shows_each_trial_within_two_seconds(runs_folder, d
     finally:
         extending.terminate()
         extending.wait(timeout=60)
-    page.wait_for_function("() => document.querySelector('#run-state').innerText.startsWith('stopped after')", timeout=UPDATE_SECONDS * 1000)
+    page.wait_for_function("() => document.querySelector('#run-state').innerText.startsWith('stopped after')", timeout=10_000)
     assert page.errors == []
 
 
