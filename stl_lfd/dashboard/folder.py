@@ -150,7 +150,8 @@ class RunView:
         return held_locks().get((os.major(status.st_dev), os.minor(status.st_dev), status.st_ino))
 
     def state(self) -> str:
-        """`damaged: ...`, `running`, `waiting for tell: trial N`, `finished` or `stopped after N of M trials`."""
+        """`damaged: ...`, `running`, `waiting for tell: trial N`, `finished` or `stopped after N
+        of M trials` (with the error of its last trial when that one failed)."""
         if self.problem:
             return f"damaged: {self.problem}"
         if self.writer() is not None:
@@ -160,7 +161,9 @@ class RunView:
             return "waiting for tell: " + ", ".join(f"trial {entry.get('trial')}" + (f" ({entry['robot']})" if entry.get("robot") else "") for entry in waiting)
         if self.summary.get("complete"):
             return "finished"
-        return f"stopped after {len(self.trials)} of {self.budget} trials" if self.budget else "stopped"
+        stopped = f"stopped after {len(self.trials)} of {self.budget} trials" if self.budget else "stopped"
+        last = self.trials[-1] if self.trials else {}
+        return stopped + (f"; trial {last['trial']} failed: {last.get('error') or 'no reason recorded'}" if last.get("status") == "failed" else "")
 
     def signals_path(self, trial: int) -> Path:
         return self.path / SIGNALS_DIR / ("initial.csv" if trial == 0 else f"trial-{trial:04d}.csv")

@@ -60,3 +60,16 @@ def test_a_run_being_written_and_one_waiting_for_tell(runs_folder, tmp_path):
     (run / "pending.json").write_text(json.dumps({"pending": [{"trial": 6, "phase": "stl", "robot": "left", "asked": 0.0}]}))
     view.refresh()
     assert view.state() == "waiting for tell: trial 6 (left)"
+
+
+def test_a_run_stopped_on_a_failed_trial_says_why(runs_folder, tmp_path):
+    run = tmp_path / "run"
+    shutil.copytree(runs_folder / "finished", run)
+    summary = json.loads((run / "summary.json").read_text()) | {"complete": False, "budget": 8}
+    (run / "summary.json").write_text(json.dumps(summary))
+    last = json.loads((run / "trials.jsonl").read_text().splitlines()[-1])
+    with open(run / "trials.jsonl", "a") as stream:
+        stream.write(json.dumps(last | {"trial": 6, "status": "failed", "robustness": None, "error": "ExecutionError: protective stop"}) + "\n")
+    view = RunView(run)
+    view.refresh()
+    assert view.state() == "stopped after 6 of 8 trials; trial 6 failed: ExecutionError: protective stop"
