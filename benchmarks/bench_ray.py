@@ -58,7 +58,7 @@ def main(argv: list[str] | None = None) -> None:
     import ray
 
     task = load_task(ROOT / "configs" / "phi1.yaml").with_overrides(trials=arguments.trials, initial=min(8, arguments.trials), method=arguments.method)
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    ray.init(address="local", num_cpus=2, include_dashboard=False, log_to_driver=False)  # a new Ray, not a cluster running here
     try:
         with tempfile.TemporaryDirectory() as folder:
             one, one_trials = timed_run(task, Path(folder) / "one")

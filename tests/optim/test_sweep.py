@@ -162,6 +162,7 @@ def test_the_command_prints_the_table_and_writes_the_figure_with_local_workers(t
 
 @pytest.mark.slow
 @pytest.mark.heavy
+@pytest.mark.xdist_group("ray")  # one Ray at a time on the machine (tests/optim/test_ray_trials.py)
 def test_ray_gives_the_table_of_local_workers(tmp_path, learned_model_file):
     import ray
 
@@ -169,7 +170,7 @@ def test_ray_gives_the_table_of_local_workers(tmp_path, learned_model_file):
 
     plan = load_sweep(sweep_file(tmp_path, learned_model_file, seeds=1))  # a cell for each of ray's two workers
     run_sweep(plan, tmp_path / "local", lambda cells: local_results(cells, 2))
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    ray.init(address="local", num_cpus=2, include_dashboard=False, log_to_driver=False)  # a new Ray, not a cluster running here
     try:
         run_sweep(plan, tmp_path / "ray", lambda cells: ray_results(cells, None))
     finally:

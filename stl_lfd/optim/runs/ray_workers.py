@@ -39,6 +39,23 @@ def connect(address: str | None) -> None:
         ray.init(address=address, runtime_env={"env_vars": {name: "1" for name in THREAD_VARIABLES}}, log_to_driver=False, logging_level=logging.WARNING)
     except ConnectionError as error:
         raise ConfigError(f"{spelled('ray')} {address}: {str(error).split('. ')[0]}") from None
+    _messages_to_stderr()
+
+
+def _messages_to_stderr() -> None:
+    """Ray prints its nodes' messages (a worker died, a task is retried) on stdout, where a
+    command's output is data (`optimize` prints the summary's JSON): onto stderr with them."""
+    from ray._private import worker
+
+    printed = getattr(worker, "print_to_stdstream", None)
+    if printed is None or getattr(printed, "to_stderr", False):
+        return
+
+    def to_stderr(data: dict, ignore_prefix: bool) -> None:
+        printed({**data, "is_err": True}, ignore_prefix)
+
+    to_stderr.to_stderr = True  # type: ignore[attr-defined]
+    worker.print_to_stdstream = to_stderr
 
 
 class TrialWorker:
