@@ -89,7 +89,4 @@ def dashboard(
             raise ConfigError(f"{folder}: no such folder (the dashboard shows the runs under a folder, default runs/)")
         from stl_lfd.dashboard.app import serve
 
-        try:
-            serve(folder, host, port, ready=lambda url: print(f"stlopt dashboard on {url} (Ctrl-C stops it)", file=sys.stderr, flush=True))
-        except OSError as error:
-            raise ConfigError(f"--host {host} --port {port}: cannot listen there ({error.strerror or error})") from None
+        serve(folder, host, port, ready=lambda url: print(f"stlopt dashboard on {url} (Ctrl-C stops it)", file=sys.stderr, flush=True))

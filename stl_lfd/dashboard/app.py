@@ -13,6 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from stl_lfd.dashboard.board import REFRESH_SECONDS, Dashboard
+from stl_lfd.errors import ConfigError
+from stl_lfd.spelling import spelled
 
 
 def warm_up() -> None:
@@ -46,12 +48,26 @@ def create_app(folder: Path) -> Any:
     return app
 
 
+def check_listenable(host: str, port: int) -> None:
+    """Refuse, with one line, an address that cannot be listened on (werkzeug would print its
+    own lines and exit)."""
+    import socket
+
+    try:
+        with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            probe.bind((host, port))
+    except OSError as error:
+        raise ConfigError(f"{spelled('host')} {host} {spelled('port')} {port}: cannot listen there ({error.strerror or error})") from None
+
+
 def serve(folder: Path, host: str = "127.0.0.1", port: int = 8050, ready: Any = None) -> None:
     """Serve the dashboard until interrupted (`ready(url)` once it listens)."""
     import logging
 
     from werkzeug.serving import make_server
 
+    check_listenable(host, port)
     app = create_app(folder)
     warm_up()
     logging.getLogger("werkzeug").setLevel(logging.ERROR)  # no line per request on the terminal
