@@ -38,16 +38,25 @@ def same_trials(first: list[dict], second: list[dict]) -> bool:
 
 
 def start_up_seconds(task, workers: int) -> float:
-    """The time to start `workers` Ray actors, each with its PyBullet world."""
-    from stl_lfd.optim.objective import ObjectiveFactory, task_models
+    """How much longer the first batch of `workers` trials takes on Ray than the next one: the
+    worker processes build their PyBullet worlds (and import stlopt, in a new process)."""
+    import numpy as np
+
+    from stl_lfd.optim.objective import ObjectiveFactory, objective_for, task_models
     from stl_lfd.optim.runs.ray_workers import RayPool
 
-    factory = ObjectiveFactory(task, task_models(task))
-    start = time.perf_counter()
-    pool = RayPool(factory, workers, "auto")  # the local Ray started in main
-    seconds = time.perf_counter() - start
+    models = task_models(task)
+    space, objective = objective_for(task, models)
+    objective.close()
+    x = np.asarray(space.bounds, dtype=float).mean(axis=0)
+    pool = RayPool(ObjectiveFactory(task, models), workers, "auto")  # the local Ray started in main
+    batches = []
+    for first in (1, 1 + workers):
+        start = time.perf_counter()
+        pool([(x, first + offset) for offset in range(workers)])()
+        batches.append(time.perf_counter() - start)
     pool.close()
-    return seconds
+    return batches[0] - batches[1]
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -79,7 +88,7 @@ def main(argv: list[str] | None = None) -> None:
         [
             Row("1 worker, this process", f"{trials} trials", one / trials, None, f"{one:.1f} s, of which proposing {proposing:.1f} s"),
             Row("1 Ray worker", f"{trials} trials", ray_one / trials, None, f"{ray_one:.1f} s"),
-            Row("Ray start-up", "1 / 2 actors", start_one, None, f"{start_one:.1f} s / {start_two:.1f} s, each with its world"),
+            Row("Ray start-up", "1 / 2 workers", start_one, None, f"{start_one:.1f} s / {start_two:.1f} s: the first batch's worlds"),
             Row("Ray overhead", "per trial", per_trial, None, "1 Ray worker less start-up, against this process"),
             Row("2 local workers", f"{trials} trials", local_two / trials, None, f"{one / local_two:.2f}x faster than 1 worker"),
             Row("2 Ray workers", f"{trials} trials", ray_two / trials, None, f"{one / ray_two:.2f}x faster than 1 worker"),

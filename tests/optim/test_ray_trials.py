@@ -1,5 +1,5 @@
 """The trials of one run on a Ray cluster (`optimize --ray`): a local cluster of two nodes, one
-CPU each, so that the two workers' actors run on different nodes."""
+CPU each, so that a batch's two trials run on different nodes."""
 
 import json
 import os
@@ -57,15 +57,15 @@ def optimize_on_ray(task: Path, out: Path, address: str) -> subprocess.Popen:
     return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
-def evaluating_actors() -> list[int]:
-    """The processes of Ray actors in the middle of a trial (Ray titles them by the method)."""
+def evaluating_workers() -> list[int]:
+    """The Ray worker processes in the middle of a trial (Ray titles them by the task)."""
     found = []
     for entry in Path("/proc").iterdir():
         try:
             command = (entry / "cmdline").read_bytes() if entry.name.isdigit() else b""
         except OSError:
             continue
-        if command.startswith(b"ray::TrialWorker.evaluate"):
+        if command.startswith(b"ray::evaluate_trial"):
             found.append(int(entry.name))
     return found
 
@@ -79,12 +79,28 @@ def test_trials_on_a_two_node_cluster_equal_the_local_workers(tmp_path, cluster,
     assert trials_of(tmp_path / "run") == local_trials
 
 
+def test_a_node_that_dies_mid_trial_has_its_trial_run_again_elsewhere(tmp_path, cluster, pybullet_task, local_trials):
+    process = optimize_on_ray(pybullet_task, tmp_path / "run", cluster.address)
+    trials = tmp_path / "run" / "trials.jsonl"
+    wait_for(lambda: trials.exists() and len(trials.read_text().splitlines()) >= 2 and len(evaluating_workers()) == 2, timeout=300)
+    worker_node = next(node for node in cluster.worker_nodes)
+    cluster.remove_node(worker_node)  # its trial in flight is lost there; the head node runs it again
+    try:
+        out, err = process.communicate(timeout=600)
+    finally:
+        cluster.add_node(num_cpus=1)  # the cluster as the other tests expect it
+        cluster.wait_for_nodes()
+    assert process.returncode == 0 and "Traceback" not in err, err
+    assert json.loads(out)["trials"] == TRIALS
+    assert trials_of(tmp_path / "run") == local_trials
+
+
 def test_a_worker_killed_mid_trial_has_its_trial_run_again_and_recorded_once(tmp_path, cluster, pybullet_task, local_trials):
     process = optimize_on_ray(pybullet_task, tmp_path / "run", cluster.address)
     trials = tmp_path / "run" / "trials.jsonl"
-    wait_for(lambda: trials.exists() and len(trials.read_text().splitlines()) >= 2 and evaluating_actors(), timeout=300)
+    wait_for(lambda: trials.exists() and len(trials.read_text().splitlines()) >= 2 and evaluating_workers(), timeout=300)
     killed = len(trials.read_text().splitlines())
-    os.kill(evaluating_actors()[0], signal.SIGKILL)
+    os.kill(evaluating_workers()[0], signal.SIGKILL)
     out, err = process.communicate(timeout=600)
     assert process.returncode == 0 and "Traceback" not in err, err
     assert json.loads(out)["trials"] == TRIALS  # Ray's messages about the dead worker are on stderr, not in the JSON

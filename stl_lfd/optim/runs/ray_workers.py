@@ -1,10 +1,12 @@
 """Parallel trials on a Ray cluster (`optimize --ray`): the interface of `workers.WorkerPool`,
-with Ray actors in place of local processes.
+with Ray tasks in place of local processes.
 
-Each worker is an actor of one CPU that builds its objective (its PyBullet or MuJoCo world, or
-its executor command) once and keeps it for its life. A batch gives each actor one trial in
-turn. An actor whose process or node dies is started again (its objective built anew, on any
-node with a free CPU) and its trial re-run there, up to `RESTARTS` times per actor; the driver
+Each trial is a Ray task of one CPU. The worker process that runs it builds the run's
+objective (its PyBullet or MuJoCo world, or its executor command) at its first trial of the
+run and keeps it for the next ones (Ray reuses its worker processes). A batch holds `workers`
+trials, and the next batch is submitted as soon as it is proposed: it starts on the CPUs the
+current one leaves free. A trial whose worker process or node
+dies is run again by Ray on any node with a free CPU, up to `RETRIES` times; the driver
 records each trial once, when its outcome arrives. Beyond that the run stops as with a dead
 local worker, and `--resume` continues it.
 """
@@ -13,16 +15,18 @@ from __future__ import annotations
 
 import logging
 import os
+import uuid
 from typing import Any, Callable
 
 import numpy as np
 
-from stl_lfd.errors import ConfigError, RunError
+from stl_lfd.errors import ConfigError
 from stl_lfd.optim.runs.workers import THREAD_VARIABLES, WORKER_NICENESS, died
 from stl_lfd.optim.trials import Outcome, describe_error
 from stl_lfd.spelling import spelled
 
-RESTARTS = 3  # times an actor whose process or node died is started again, its trial re-run
+RETRIES = 3  # times a trial whose worker process or node died is run again
+_built: dict[str, Any] = {}  # in a Ray worker process: the objective of the run it last served, by the run's key
 
 
 def connect(address: str | None) -> None:
@@ -58,94 +62,75 @@ def _messages_to_stderr() -> None:
     worker.print_to_stdstream = to_stderr
 
 
-class TrialWorker:
-    """The body of one actor: an objective built once, evaluating trials one at a time."""
+def evaluate_trial(key: str, make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]], x: np.ndarray, trial: int) -> Outcome | str:
+    """In a Ray worker process: trial `trial` at `x` on the objective of the run `key` (built at
+    the process's first trial of that run), or the message of its error."""
+    objective = _built.get(key)
+    if objective is None:
+        objective = _objective_for(key, make_objective)
+    try:
+        return objective(x, trial)
+    except Exception as error:
+        return describe_error(error)
 
-    def __init__(self, make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]]) -> None:
-        import warnings
 
-        os.nice(WORKER_NICENESS)  # as a local worker: the driver's proposal on the same node comes first
-        warnings.simplefilter("ignore")  # an actor has no terminal: tracking warnings would be lost
-        self.objective = make_objective()
+def _objective_for(key: str, make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]]) -> Callable[[np.ndarray, int], Outcome]:
+    import warnings
 
-    def ready(self) -> bool:
-        return True
-
-    def pid(self) -> int:
-        return os.getpid()
-
-    def evaluate(self, x: np.ndarray, trial: int) -> Outcome | str:
-        try:
-            return self.objective(x, trial)
-        except Exception as error:
-            return describe_error(error)
-
-    def close(self) -> None:
-        close = getattr(self.objective, "close", None)
+    if not _built:  # the process's first run: as a local worker, the driver's proposal on the same node comes first
+        os.nice(WORKER_NICENESS)
+        warnings.simplefilter("ignore")  # a task has no terminal: tracking warnings would be lost
+    for old in list(_built):  # one run's world at a time in a process
+        close = getattr(_built.pop(old), "close", None)
         if close is not None:
             close()
+    _built[key] = make_objective()
+    return _built[key]
 
 
 class RayPool:
-    """`workers` Ray actors that evaluate trials, each with the objective `make_objective()`
-    builds in it (picklable), on the cluster at `address` (see `connect`)."""
+    """Trials as Ray tasks, `workers` at once, each on the objective `make_objective()` builds
+    in the process that runs it (picklable), on the cluster at `address` (see `connect`)."""
 
     def __init__(self, make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]], workers: int, address: str | None) -> None:
         connect(address)
         import ray
 
-        actor = ray.remote(num_cpus=1, max_restarts=RESTARTS, max_task_retries=RESTARTS)(TrialWorker)
-        self.actors: list[Any] = [actor.remote(make_objective) for _ in range(workers)]
-        self.turn = 0  # the actor that takes the next trial
-        try:
-            ray.get([worker.ready.remote() for worker in self.actors])  # every world built now
-        except ray.exceptions.RayActorError as error:
-            self.stop()
-            raise RunError(f"a Ray worker could not start: {_cause(error)}") from None
-        except BaseException:
-            self.stop()
-            raise
+        self.key = uuid.uuid4().hex
+        self.factory = ray.put(make_objective)
+        self.task = ray.remote(num_cpus=1, max_retries=RETRIES)(evaluate_trial)
+        self.running: list[Any] = []
 
     def __call__(self, points: list[tuple[np.ndarray, int]]) -> Callable[[], list[Outcome | str]]:
         """Start evaluating each `(x, trial number)`; returns the function that waits for the
         outcomes (or error messages), in order."""
         import ray
 
-        futures = []
-        for x, trial in points:
-            futures.append(self.actors[self.turn].evaluate.remote(x, trial))
-            self.turn = (self.turn + 1) % len(self.actors)
+        futures = [self.task.remote(self.key, self.factory, x, trial) for x, trial in points]
+        self.running.extend(futures)
 
         def wait() -> list[Outcome | str]:
             try:
-                return ray.get(futures)
-            except ray.exceptions.RayActorError:
+                outcomes = ray.get(futures)
+            except ray.exceptions.RayError:  # a worker process or node died more than RETRIES times
                 self.stop()
-                raise died(points, f"a Ray worker died more than {RESTARTS} times") from None
+                raise died(points, f"a Ray worker died more than {RETRIES} times") from None
             except BaseException:  # Ctrl-C: the trials in flight are lost, as with one worker
                 self.stop()
                 raise
+            self.running = [future for future in self.running if future not in futures]
+            return outcomes
 
         return wait
 
     def stop(self) -> None:
-        """End the actors now (their trials in flight are lost)."""
+        """Cancel the trials in flight (they are lost)."""
         import ray
 
-        for worker in self.actors:
-            ray.kill(worker, no_restart=True)
+        for future in self.running:
+            ray.cancel(future, force=True)
+        self.running = []
 
     def close(self) -> None:
-        """Close each actor's objective (its executor, its world), then end the actors."""
-        import ray
-
-        try:
-            ray.get([worker.close.remote() for worker in self.actors])
-        finally:
-            self.stop()
-
-
-def _cause(error: Exception) -> str:
-    """The first line of what ended an actor, without Ray's wrapping."""
-    cause = getattr(error, "cause", None) or error
-    return str(cause).strip().splitlines()[-1] if str(cause).strip() else type(cause).__name__
+        """Nothing runs any more; the worker processes keep their objective until the next run."""
+        self.running = []
