@@ -84,6 +84,12 @@ def _thinned(values: np.ndarray) -> list[float]:
     return np.round(values[::step], 5).tolist()
 
 
+def moved_objects(table: SignalTable, least: float = 0.001) -> list[str]:
+    """The objects whose recorded position (`NAME_x`, `NAME_y`) moved by more than `least` m."""
+    names = [column[: -len("_x")] for column in table.columns if column.endswith("_x") and f"{column[:-2]}_y" in table.columns]
+    return [name for name in names if max(np.ptp(table.columns[f"{name}_x"]), np.ptp(table.columns[f"{name}_y"])) > least]
+
+
 def paths_figure(view: RunView, regions: dict[str, dict[str, tuple[float, float]]], outlines: list[np.ndarray]) -> Figure:
     """Seen from above: the hand's path in the latest and the best trial, a moved object's path
     (dashed), the spec's regions and the outlines of the scene's objects."""
@@ -103,7 +109,7 @@ def paths_figure(view: RunView, regions: dict[str, dict[str, tuple[float, float]
                 "line": {"color": color},
             }
         )
-        for name in [column[: -len("_x")] for column in table.columns if column.endswith("_x") and f"{column[:-2]}_y" in table.columns]:
+        for name in moved_objects(table):
             data.append(
                 {"type": "scatter", "mode": "lines", "name": f"{name}, {label}", "x": _thinned(table.columns[f"{name}_x"]),
                  "y": _thinned(table.columns[f"{name}_y"]), "line": {"color": color, "dash": "dash"}}

@@ -48,3 +48,14 @@ def test_a_pending_trial_is_shown_with_its_robot_and_reference(runs_folder, tmp_
     assert "6 left" in words(pending) and "executions/trial-0006/reference.csv" in words(pending)
     runs, sweeps, _ = index_signature(board)
     assert "waiting for tell: trial 6 (left)" in words(index_content(board, runs, sweeps))
+
+
+def test_only_objects_that_moved_get_a_path():
+    import numpy as np
+
+    from stl_lfd.dashboard.figures import moved_objects
+    from stl_lfd.signals import SignalTable
+
+    times = np.linspace(0, 1, 5)
+    carried = {"shaft_x": np.linspace(0.4, 0.5, 5), "shaft_y": np.zeros(5), "holder_x": np.full(5, 0.55), "holder_y": np.full(5, 0.2)}
+    assert moved_objects(SignalTable(times, {"x": times, "y": times} | carried)) == ["shaft"]
