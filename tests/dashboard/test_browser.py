@@ -51,7 +51,8 @@ def page():
     with sync_playwright() as playwright:
         browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_FLAGS)
         page = browser.new_page(viewport={"width": 1280, "height": 900})
-        page.errors = []
+        page.errors, page.requests = [], []
+        page.on("request", lambda request: page.requests.append(request.url))
         page.on("console", lambda message: page.errors.append(message.text) if message.type == "error" else None)
         page.on("pageerror", lambda error: page.errors.append(str(error)))
         yield page
@@ -120,3 +121,4 @@ def test_the_index_a_sweep_and_a_damaged_run(runs_folder, dashboard_url, page, t
     page.click("a[href='/run/damaged']")
     page.wait_for_function("() => document.querySelector('#run-state') && document.querySelector('#run-state').innerText.startsWith('damaged')")
     assert page.errors == []
+    assert page.requests and [url for url in page.requests if not url.startswith(dashboard_url)] == []  # nothing from elsewhere: works offline
