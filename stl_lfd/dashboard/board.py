@@ -3,6 +3,7 @@ and what a run's figures draw besides its trials (`RunExtras`, read once)."""
 
 from __future__ import annotations
 
+import os
 import threading
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,7 +34,7 @@ class Dashboard:
     def __init__(self, folder: Path) -> None:
         self.folder = Path(folder).resolve()
         self.views: dict[Path, RunView] = {}
-        self.extras: dict[Path, RunExtras] = {}
+        self.extras: dict[tuple[Path, int], RunExtras] = {}  # by run and the version of its task.yaml
         self.rows: dict[Path, tuple[tuple, list[Any]]] = {}  # a run's row in the tables, by its version and writer
         self.lock = threading.Lock()
 
@@ -44,14 +45,19 @@ class Dashboard:
             return view
 
     def extras_of(self, view: RunView) -> RunExtras:
-        if view.path not in self.extras:
-            self.extras[view.path] = run_extras(view)
-        return self.extras[view.path]
+        key = (view.path, view.task_version)
+        if key not in self.extras:
+            self.extras[key] = run_extras(view)
+        return self.extras[key]
 
     def resolve(self, relative: str) -> Path | None:
-        """The folder's run or sweep at `relative` (a page's address), None outside the folder."""
-        path = (self.folder / unquote(relative)).resolve()
-        return path if path == self.folder or self.folder in path.parents else None
+        """The folder's run or sweep at `relative` (a page's address), None outside the folder
+        (links inside it are followed, as `find` follows them)."""
+        path = Path(os.path.normpath(self.folder / unquote(relative)))
+        return path if self.inside(path) else None
+
+    def inside(self, path: Path) -> bool:
+        return path == self.folder or self.folder in path.parents
 
     def address(self, prefix: str, path: Path) -> str:
         return prefix + quote(str(path.relative_to(self.folder)) if path != self.folder else ".")

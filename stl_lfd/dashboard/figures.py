@@ -203,11 +203,15 @@ def signals_figure(view: RunView, thresholds: dict[str, list[Any]]) -> Figure:
 def tracking_figure(view: RunView) -> Figure | None:
     """The RMS error of the plan and of the learned tracking model as predictions of each
     execution (`tracking.json`), when the run learned how its robot tracks."""
+    from stl_lfd.errors import RunError
     from stl_lfd.optim.tracking import TRACKING_FILE, read_tracking
 
     if not (view.path / TRACKING_FILE).is_file():
         return None
-    record = read_tracking(view.path)
+    try:
+        record = read_tracking(view.path)
+    except RunError:  # damaged, or being rewritten: the page goes without it until it reads
+        return None
     if record is None or not record.errors:
         return None
     numbers = sorted(record.errors)

@@ -23,7 +23,7 @@ from stl_lfd.optim.runs.lock import LOCK_FILE
 
 SWEEP_FILE = "sweep.yaml"
 SWEEP_RUNS = "runs"
-WATCHED = (TRIALS_FILE, SUMMARY_FILE, PENDING_FILE, LOCK_FILE)  # a change to any is an update
+WATCHED = (TASK_FILE, TRIALS_FILE, SUMMARY_FILE, PENDING_FILE, LOCK_FILE)  # a change to any is an update
 MAX_DEPTH = 3  # how deep under the folder runs and sweeps are looked for
 
 
@@ -82,6 +82,7 @@ class RunView:
     pending: list[dict[str, Any]] = field(default_factory=list)
     problem: str = ""
     version: int = 0
+    task_version: int = 0  # grows when task.yaml is read (again: another run moved in)
     _offset: int = 0
     _stamp: tuple = ()
 
@@ -90,6 +91,10 @@ class RunView:
         stamp = tuple(_stat(self.path / name) for name in WATCHED)
         if stamp == self._stamp and self.version > 0:
             return False
+        if self._stamp and stamp[0] != self._stamp[0]:  # another run's task.yaml: another run moved in
+            self.task = {}
+        if self._stamp and stamp[1][2] != self._stamp[1][2]:  # trials.jsonl replaced, not appended to
+            self.trials, self._offset = [], 0
         self._stamp = stamp
         self.problem = ""
         try:
@@ -102,9 +107,15 @@ class RunView:
     def _read(self) -> None:
         if not self.task:
             self.task = _mapping(yaml.safe_load((self.path / TASK_FILE).read_text()), TASK_FILE)
+            self.task_version += 1
         self.summary = _json_file(self.path / SUMMARY_FILE, {})
         pending = _json_file(self.path / PENDING_FILE, {"pending": []})
-        self.pending = pending.get("pending", []) if "pending" in pending else [pending]
+        entries = pending.get("pending", []) if "pending" in pending else [pending]
+        if not isinstance(entries, list) or not all(isinstance(entry, dict) for entry in entries):
+            raise ValueError(f"{PENDING_FILE}: not a list of pending trials")
+        self.pending = entries
+        if not isinstance(self.task.get("optimizer") or {}, dict):
+            raise ValueError(f"{TASK_FILE}: 'optimizer' is not a mapping")
         self._read_new_trials()
 
     def _read_new_trials(self) -> None:
@@ -122,7 +133,7 @@ class RunView:
                 record = json.loads(line)
             except json.JSONDecodeError:
                 record = None
-            if not isinstance(record, dict) or "trial" not in record:
+            if not _is_trial_record(record):
                 raise ValueError(f"{TRIALS_FILE} line {number}: not a trial record")
             self.trials.append(record)
             self._offset += len(line) + 1
@@ -132,8 +143,14 @@ class RunView:
         return str(self.task.get("name") or self.path.name)
 
     @property
+    def method(self) -> str:
+        optimizer = self.task.get("optimizer")
+        return str(optimizer.get("method", "-")) if isinstance(optimizer, dict) else "-"
+
+    @property
     def budget(self) -> int | None:
-        budget = self.summary.get("budget") or (self.task.get("optimizer") or {}).get("trials")
+        optimizer = self.task.get("optimizer")
+        budget = self.summary.get("budget") or (optimizer.get("trials") if isinstance(optimizer, dict) else None)
         return int(budget) if isinstance(budget, (int, float)) else None
 
     def best(self) -> dict[str, Any] | None:
@@ -195,12 +212,20 @@ def held_locks(max_age: float = 0.2) -> dict[tuple[int, int, int], int]:
     return _locks[1]
 
 
-def _stat(path: Path) -> tuple[int, int]:
+def _is_trial_record(record: Any) -> bool:
+    """What the dashboard reads of a trial record is there and of its type."""
+    if not isinstance(record, dict) or type(record.get("trial")) is not int:
+        return False
+    robustness, components = record.get("robustness"), record.get("components")
+    return (robustness is None or type(robustness) in (int, float)) and (components is None or isinstance(components, dict))
+
+
+def _stat(path: Path) -> tuple[int, int, int]:
     try:
         status = path.stat()
     except OSError:
-        return (-1, -1)
-    return (status.st_size, status.st_mtime_ns)
+        return (-1, -1, -1)
+    return (status.st_size, status.st_mtime_ns, status.st_ino)
 
 
 def _json_file(path: Path, missing: dict[str, Any]) -> dict[str, Any]:

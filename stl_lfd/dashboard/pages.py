@@ -7,7 +7,6 @@ answers "no update" when they are the same.
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import Any
 
@@ -46,9 +45,12 @@ def _run_row(board: Dashboard, view: RunView, prefix: str = RUN_PREFIX) -> list[
     key = (view.version, view.writer())
     cached = board.rows.get(view.path)
     if cached is None or cached[0] != key:
-        budget = f" of {view.budget}" if view.budget else ""
         link = dcc.Link(view.name, href=board.address(prefix, view.path))
-        row = [link, str(view.path.relative_to(board.folder)), view.state(), f"{len(view.trials)}{budget}", _best_text(view)]
+        try:
+            budget = f" of {view.budget}" if view.budget else ""
+            row = [link, str(view.path.relative_to(board.folder)), view.state(), f"{len(view.trials)}{budget}", _best_text(view)]
+        except Exception as error:  # whatever the checks of `RunView` let through: one row says so
+            row = [link, str(view.path.relative_to(board.folder)), f"damaged: {type(error).__name__}: {error}", "-", "-"]
         board.rows[view.path] = cached = (key, row)
     return cached[1]
 
@@ -110,7 +112,7 @@ def run_status(view: RunView) -> html.Div:
         ("best", _best_text(view)),
         ("unoptimised", f"{summary['initial_robustness']:+.5f}" if isinstance(summary.get("initial_robustness"), (int, float)) else "-"),
         ("spec", str(view.task.get("spec", "-"))),
-        ("method", str((view.task.get("optimizer") or {}).get("method", "-"))),
+        ("method", view.method),
         ("backend", str(view.task.get("backend", "-"))),
     ]
     return html.Div([html.Span([html.B(f"{name}: "), html.Span(value, id=f"run-{name}"), "   "]) for name, value in facts])
@@ -144,13 +146,17 @@ def run_outputs(board: Dashboard, path: Path, seen: Any = None) -> tuple | None:
     shown = [view.version, view.writer() is not None]
     if seen == shown:
         return None
-    extras = board.extras_of(view)
-    tracking = figures.tracking_figure(view) if not view.problem else None
-    return (
-        run_status(view), run_pending(view), figures.robustness_figure(view), figures.parts_figure(view),
-        figures.paths_figure(view, extras.regions, extras.outlines), figures.signals_figure(view, extras.thresholds),
-        tracking or {}, {"display": "block" if tracking else "none"}, shown,
-    )  # fmt: skip
+    try:
+        extras = board.extras_of(view)
+        tracking = figures.tracking_figure(view) if not view.problem else None
+        return (
+            run_status(view), run_pending(view), figures.robustness_figure(view), figures.parts_figure(view),
+            figures.paths_figure(view, extras.regions, extras.outlines), figures.signals_figure(view, extras.thresholds),
+            tracking or {}, {"display": "block" if tracking else "none"}, shown,
+        )  # fmt: skip
+    except Exception as error:  # whatever the checks of `RunView` let through: the page says so
+        view.problem = f"cannot be drawn ({type(error).__name__}: {error})"
+        return run_status(view), None, {}, {}, {}, {}, {}, {"display": "none"}, shown
 
 
 def sweep_page(board: Dashboard, path: Path) -> html.Div:
@@ -193,6 +199,8 @@ def register(app: Any, board: Dashboard) -> None:
         Input("run-tick", "n_intervals"), State("run-path", "data"), State("run-seen", "data"),
     )  # fmt: skip
     def refresh_run(_: int, path: str, seen: Any) -> Any:
+        if not isinstance(path, str) or not board.inside(Path(path)):  # the page's stored path, as the browser sent it back
+            raise PreventUpdate
         outputs = run_outputs(board, Path(path), seen)
         if outputs is None:
             raise PreventUpdate
@@ -206,13 +214,14 @@ def register(app: Any, board: Dashboard) -> None:
         State("sweep-seen", "data"),
     )
     def refresh_sweep(_: int, path: str, seen: Any) -> Any:
+        if not isinstance(path, str) or not board.inside(Path(path)) or not Path(path).is_dir():
+            raise PreventUpdate
         views = [board.view(run) for run in sweep_runs(Path(path))]
         signature = [str(view.path) for view in views] + [view.version for view in views]
         if signature == seen:
             raise PreventUpdate
         rows = [_run_row(board, view) for view in views]
-        started = time.strftime("%Y-%m-%d %H:%M", time.localtime(Path(path).stat().st_mtime))
         return [
-            html.P(f"{len(views)} runs finished (folder changed {started})"),
+            html.P(f"{len(views)} runs finished"),
             _table(["run", "folder", "state", "trials", "best robustness"], rows, "cells"),
         ], signature

@@ -59,3 +59,32 @@ def test_only_objects_that_moved_get_a_path():
     times = np.linspace(0, 1, 5)
     carried = {"shaft_x": np.linspace(0.4, 0.5, 5), "shaft_y": np.zeros(5), "holder_x": np.full(5, 0.55), "holder_y": np.full(5, 0.2)}
     assert moved_objects(SignalTable(times, {"x": times, "y": times} | carried)) == ["shaft"]
+
+
+def test_damaged_files_of_every_kind_are_shown_and_never_break_a_page(runs_folder, tmp_path):
+    import pytest
+
+    damages = {
+        "pending": ("pending.json", '{"pending": null}'),
+        "optimizer": ("task.yaml", "name: x\noptimizer: cmaes\n"),
+        "trial-number": ("trials.jsonl", '{"trial": "x"}\n'),
+        "robustness": ("trials.jsonl", '{"trial": 1, "robustness": "bad"}\n'),
+        "tracking": ("tracking.json", '{"trials": [1], "errors": {"1": {}}'),
+    }
+    for name, (file, text) in damages.items():
+        run = tmp_path / "runs" / name
+        shutil.copytree(runs_folder / "finished", run)
+        (run / file).write_text(text)
+    board = Dashboard(tmp_path / "runs")
+    for name in damages:
+        outputs = run_outputs(board, tmp_path / "runs" / name)
+        state = words(outputs[0])
+        if name == "tracking":  # a run whose tracking record is damaged is drawn without it
+            assert "state: finished" in state and outputs[7] == {"display": "none"}
+        else:
+            assert "state: damaged: " in state, (name, state)
+    runs, sweeps, _ = index_signature(board)
+    rows = words(index_content(board, runs, sweeps))
+    assert rows.count("damaged:") == 4, rows
+    with pytest.raises(AssertionError):  # the paths a page sends back are the folder's only
+        assert board.resolve("../../etc") is not None

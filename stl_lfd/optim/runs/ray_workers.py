@@ -65,10 +65,8 @@ def _messages_to_stderr() -> None:
 def evaluate_trial(key: str, make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]], x: np.ndarray, trial: int) -> Outcome | str:
     """In a Ray worker process: trial `trial` at `x` on the objective of the run `key` (built at
     the process's first trial of that run), or the message of its error."""
-    objective = _built.get(key)
-    if objective is None:
-        objective = _objective_for(key, make_objective)
-    try:
+    try:  # a world that cannot be built (a scene file missing on this node) fails the trial, with why
+        objective = _built.get(key) or _objective_for(key, make_objective)
         return objective(x, trial)
     except Exception as error:
         return describe_error(error)

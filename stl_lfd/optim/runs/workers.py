@@ -40,7 +40,10 @@ _outbox: Path | None = None  # where the worker process writes its outcomes (`_h
 _busy = False  # whether the worker is evaluating a trial (a stop then unwinds it first)
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")  # one thread per worker
 WORKER_NICENESS = 10
-PARENT_CHECK_SECONDS = 1.0  # how often a worker checks that the process that started it lives
+PARENT_CHECK_SECONDS = 1.0
+ERROR_MARK = (
+    "error: "  # an outcome handed back as its error message (`_handed_back`), not as a file  # how often a worker checks that the process that started it lives
+)
 
 
 class WorkerPool:
@@ -68,9 +71,9 @@ class WorkerPool:
         outcomes (or error messages), in order."""
         try:
             futures = [self.pool.submit(_evaluate, x, trial) for x, trial in points]
-        except BrokenProcessPool:
+        except BrokenProcessPool:  # a worker died on a trial submitted before these
             self.stop()
-            raise died(points) from None
+            raise died([], "a worker process died (killed, or crashed)") from None
 
         def wait() -> list[Outcome | str]:
             try:
@@ -86,6 +89,8 @@ class WorkerPool:
 
     def taken_back(self, name: str) -> Outcome | str:
         """The outcome a worker handed back in the file `name` (`_handed_back`), read once."""
+        if name.startswith(ERROR_MARK):
+            return name[len(ERROR_MARK) :]
         path = self.outbox / name
         try:
             return pickle.loads(path.read_bytes())
@@ -106,7 +111,7 @@ class WorkerPool:
 def died(points: list[tuple[np.ndarray, int]], what: str = "a worker process died (killed, or crashed)") -> RunError:
     """The error that stops a run whose worker died running the trials `points`."""
     numbers = [trial for _, trial in points]
-    trials = f"trial {numbers[0]}" if len(numbers) == 1 else f"trials {numbers[0]} to {numbers[-1]}"
+    trials = "the trials in flight" if not numbers else f"trial {numbers[0]}" if len(numbers) == 1 else f"trials {numbers[0]} to {numbers[-1]}"
     return RunError(f"{what} while running {trials}; those trials are lost and the run stops here: continue it with the same command and {spelled('resume')}")
 
 
@@ -135,10 +140,17 @@ def _evaluate(x: np.ndarray, trial: int) -> str:
         outcome = run_stoppable(_objective, x, trial)
     except Exception as error:
         outcome = describe_error(error)
-    return _handed_back(outcome, trial)
+    try:
+        return _handed_back(outcome, trial)
+    except Exception as error:  # a full disk, say: the trial fails with why, the run goes on
+        return _handed_back(f"its outcome could not be handed back ({describe_error(error)})", trial, through_pipe=True)
 
 
-def _handed_back(outcome: Outcome | str, trial: int) -> str:
+def _handed_back(outcome: Outcome | str, trial: int, through_pipe: bool = False) -> str:
+    """The name of the file in the outbox that holds `outcome`, or (`through_pipe`, for an
+    error message, short) the message itself, marked as such."""
+    if through_pipe:
+        return ERROR_MARK + str(outcome)
     assert _outbox is not None
     path = _outbox / f"trial-{trial}.pickle"
     partial = path.with_suffix(".partial")
