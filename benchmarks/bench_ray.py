@@ -42,14 +42,13 @@ def start_up_seconds(task, workers: int) -> float:
     worker processes build their PyBullet worlds (and import stlopt, in a new process)."""
     import numpy as np
 
-    from stl_lfd.optim.objective import ObjectiveFactory, objective_for, task_models
+    from stl_lfd.optim import build_search_space
+    from stl_lfd.optim.objective import ObjectiveFactory, task_models
     from stl_lfd.optim.runs.ray_workers import RayPool
 
     models = task_models(task)
-    space, objective = objective_for(task, models)
-    objective.close()
-    x = np.asarray(space.bounds, dtype=float).mean(axis=0)
-    pool = RayPool(ObjectiveFactory(task, models), workers, "auto")  # the local Ray started in main
+    x = np.asarray(build_search_space(models, task.parameters, task.source).bounds, dtype=float).mean(axis=0)
+    pool = RayPool(ObjectiveFactory(task, models), "auto")  # the local Ray started in main
     batches = []
     for first in (1, 1 + workers):
         start = time.perf_counter()

@@ -34,7 +34,7 @@ class Dashboard:
     def __init__(self, folder: Path) -> None:
         self.folder = Path(folder).resolve()
         self.views: dict[Path, RunView] = {}
-        self.extras: dict[tuple[Path, int], RunExtras] = {}  # by run and the version of its task.yaml
+        self.extras: dict[Path, tuple[int, RunExtras]] = {}  # by run: the version of its task.yaml they were read from, and them
         self.rows: dict[Path, tuple[tuple, list[Any]]] = {}  # a run's row in the tables, by its version and writer
         self.lock = threading.Lock()
 
@@ -45,10 +45,10 @@ class Dashboard:
             return view
 
     def extras_of(self, view: RunView) -> RunExtras:
-        key = (view.path, view.task_version)
-        if key not in self.extras:
-            self.extras[key] = run_extras(view)
-        return self.extras[key]
+        known = self.extras.get(view.path)
+        if known is None or known[0] != view.task_version:
+            self.extras[view.path] = known = (view.task_version, run_extras(view))
+        return known[1]
 
     def resolve(self, relative: str) -> Path | None:
         """The folder's run or sweep at `relative` (a page's address), None outside the folder
@@ -68,12 +68,12 @@ def run_extras(view: RunView) -> RunExtras:
     cannot be read (a spec or scene moved since the run) is left out."""
     extras = RunExtras()
     try:
+        from stl_lfd.report.run_data import used_regions
         from stl_lfd.stl import load_spec
-        from stl_lfd.stl.regions import region_boxes
         from stl_lfd.stl.thresholds import signal_thresholds
 
         spec = load_spec(view.spec_path())
-        extras.regions, extras.thresholds = region_boxes(spec), signal_thresholds(spec)
+        extras.regions, extras.thresholds = used_regions(spec), signal_thresholds(spec)  # as the report draws them
     except Exception:  # the page says what it can
         pass
     try:

@@ -18,7 +18,7 @@ from typing import Any
 
 import yaml
 
-from stl_lfd.optim.runs.directory import PENDING_FILE, SIGNALS_DIR, SUMMARY_FILE, TASK_FILE, TRIALS_FILE
+from stl_lfd.optim.runs.directory import PENDING_FILE, SUMMARY_FILE, TASK_FILE, TRIALS_FILE, RunDirectory
 from stl_lfd.optim.runs.lock import LOCK_FILE
 
 SWEEP_FILE = "sweep.yaml"
@@ -91,10 +91,8 @@ class RunView:
         stamp = tuple(_stat(self.path / name) for name in WATCHED)
         if stamp == self._stamp and self.version > 0:
             return False
-        if self._stamp and stamp[0] != self._stamp[0]:  # another run's task.yaml: another run moved in
-            self.task = {}
-        if self._stamp and stamp[1][2] != self._stamp[1][2]:  # trials.jsonl replaced, not appended to
-            self.trials, self._offset = [], 0
+        if self._stamp and (stamp[0] != self._stamp[0] or stamp[1][2] != self._stamp[1][2] or stamp[1][0] < self._offset):
+            self.task, self.trials, self._offset = {}, [], 0  # task.yaml or trials.jsonl replaced: another run moved in
         self._stamp = stamp
         self.problem = ""
         try:
@@ -123,8 +121,6 @@ class RunView:
         if not path.is_file():
             return
         with open(path, "rb") as stream:
-            if os.fstat(stream.fileno()).st_size < self._offset:  # rewritten from the start (another run moved in)
-                self.trials, self._offset = [], 0
             stream.seek(self._offset)
             data = stream.read()
         complete = data[: data.rfind(b"\n") + 1]  # a line still being written waits for the next refresh
@@ -183,7 +179,7 @@ class RunView:
         return stopped + (f"; trial {last['trial']} failed: {last.get('error') or 'no reason recorded'}" if last.get("status") == "failed" else "")
 
     def signals_path(self, trial: int) -> Path:
-        return self.path / SIGNALS_DIR / ("initial.csv" if trial == 0 else f"trial-{trial:04d}.csv")
+        return RunDirectory(self.path).signals_path(trial)
 
     def spec_path(self) -> Path | None:
         spec = self.task.get("spec")

@@ -16,6 +16,7 @@ from dash.exceptions import PreventUpdate
 from stl_lfd.dashboard import figures
 from stl_lfd.dashboard.board import REFRESH_SECONDS, RUN_PREFIX, SWEEP_PREFIX, Dashboard
 from stl_lfd.dashboard.folder import RunView, age, find, sweep_runs
+from stl_lfd.sim.command import reference_path
 
 GRAPH_STYLE = {"height": "340px"}
 CELL = {"padding": "2px 12px", "textAlign": "left"}
@@ -59,21 +60,21 @@ def index_page(board: Dashboard) -> html.Div:
     return html.Div([html.H2(f"stlopt dashboard: {board.folder.name}/"), _tick("index"), dcc.Store(id="index-seen"), html.Div(id="index-content")])
 
 
-def index_signature(board: Dashboard) -> tuple[list[Path], list[Path], list]:
-    """The folder's runs and sweeps, and what the index shows changes with: their paths, the
-    runs' versions and writers, and the sweeps' finished cells."""
+def index_signature(board: Dashboard) -> tuple[list[Path], dict[Path, int], list]:
+    """The folder's runs, its sweeps with their finished cells, and what the index shows
+    changes with: their paths, the runs' versions and writers, and the sweeps' cells."""
     listing = find(board.folder)
     views = [board.view(path) for path in listing.runs]
-    cells = [len(sweep_runs(path)) for path in listing.sweeps]
-    signature = [str(path) for path in listing.runs + listing.sweeps] + [[view.version, view.writer()] for view in views] + cells
-    return list(listing.runs), list(listing.sweeps), signature
+    cells = {path: len(sweep_runs(path)) for path in listing.sweeps}
+    signature = [str(path) for path in listing.runs + listing.sweeps] + [[view.version, view.writer()] for view in views] + list(cells.values())
+    return list(listing.runs), cells, signature
 
 
-def index_content(board: Dashboard, runs: list[Path], sweeps: list[Path]) -> list[Any]:
+def index_content(board: Dashboard, runs: list[Path], cells: dict[Path, int]) -> list[Any]:
     views = [board.views[path] for path in runs]
     sweep_rows = [
-        [dcc.Link(path.name, href=board.address(SWEEP_PREFIX, path)), str(path.relative_to(board.folder)), f"{len(sweep_runs(path))} runs finished"]
-        for path in sweeps
+        [dcc.Link(path.name, href=board.address(SWEEP_PREFIX, path)), str(path.relative_to(board.folder)), f"{count} runs finished"]
+        for path, count in cells.items()
     ]
     return [
         html.H3("Runs"),
@@ -125,7 +126,7 @@ def run_pending(view: RunView) -> Any:
     rows = []
     for entry in waiting:
         trial = entry.get("trial")
-        reference = view.path / "executions" / (f"trial-{trial:04d}" if isinstance(trial, int) and trial else "initial") / "reference.csv"
+        reference = reference_path(view.path, trial if isinstance(trial, int) else 0)
         asked = entry.get("asked")
         rows.append(
             [
@@ -188,10 +189,10 @@ def register(app: Any, board: Dashboard) -> None:
 
     @app.callback(Output("index-content", "children"), Output("index-seen", "data"), Input("index-tick", "n_intervals"), State("index-seen", "data"))
     def refresh_index(_: int, seen: Any) -> Any:
-        runs, sweeps, signature = index_signature(board)
+        runs, cells, signature = index_signature(board)
         if signature == seen:
             raise PreventUpdate
-        return index_content(board, runs, sweeps), signature
+        return index_content(board, runs, cells), signature
 
     @app.callback(
         Output("run-status", "children"), Output("run-pending", "children"), Output("robustness", "figure"), Output("parts", "figure"),

@@ -117,7 +117,7 @@ def run_remaining_trials(
             following_wait, following_submitted = started(following, len(history) + 1)
         batch, proposal_seconds = following, following_seconds
         if batch:  # a batch queued behind this one is timed from when this one's outcomes arrived
-            wait, submitted = following_wait, max(following_submitted, arrived) if pipelined else following_submitted
+            wait, submitted = following_wait, max(following_submitted, arrived)
     return history
 
 

@@ -45,11 +45,17 @@ from stl_lfd.sim.watchdog import Watchdog, forget_group, group_running, record_g
 
 STOP_GRACE = 3.0  # seconds between SIGTERM and SIGKILL when a command is stopped
 EXECUTIONS_DIR = "executions"
+REFERENCE_FILE, SIGNALS_FILE = "reference.csv", "signals.csv"  # in a trial's exchange folder
 
 
 def exchange_folder(run_dir: Path, trial: int) -> Path:
     """Where the files of trial `trial` (0: the unoptimised skill) are exchanged."""
     return Path(run_dir) / EXECUTIONS_DIR / ("initial" if trial == 0 else f"trial-{trial:04d}")
+
+
+def reference_path(run_dir: Path, trial: int) -> Path:
+    """The reference of trial `trial` as handed to its executor (`stlopt ask`, or the command)."""
+    return exchange_folder(run_dir, trial) / REFERENCE_FILE
 
 
 class CommandBackend(BackendBase):
@@ -78,7 +84,7 @@ class CommandBackend(BackendBase):
         """Check `reference`, hand it to the command, and return the signals it recorded."""
         gate(reference, scene)
         with self._exchange() as folder:
-            reference_path, signals_path = folder / "reference.csv", folder / "signals.csv"
+            reference_path, signals_path = folder / REFERENCE_FILE, folder / SIGNALS_FILE
             write_reference_csv(reference, reference_path, scene.gripper_opening)
             written = _digest(reference_path)
             signals_path.unlink(missing_ok=True)  # left by an execution that was interrupted

@@ -40,12 +40,11 @@ from stl_lfd.optim.task import Overrides, Task
 from stl_lfd.optim.trials import Outcome, Trial
 from stl_lfd.signals import read_signal_csv, write_signal_csv
 from stl_lfd.sim import Reference, UnsafeReference, exchange_folder, read_reference_csv, write_reference_csv
-from stl_lfd.sim.command import EXECUTIONS_DIR, gate, tracking_error
+from stl_lfd.sim.command import EXECUTIONS_DIR, REFERENCE_FILE, gate, reference_path, tracking_error
 from stl_lfd.sim.plausibility import check_recorded
 from stl_lfd.sim.reference import Rollout, warn_if_untracked
 from stl_lfd.spelling import spelled
 
-REFERENCE_FILE = "reference.csv"
 ABANDONED = "abandoned: never told"  # the failure recorded for a trial given up with `tell --abandon`
 
 
@@ -93,7 +92,7 @@ def ask_new(task: Task, out: Path, inputs: dict[str, Any], learn_progress: Calla
         _write_reference(reference, staged.path, 0, objective.scene.gripper_opening)
         run = staged.commit(task, models, None, None, inputs, Pending(0, "initial", None, 0.0, time.time()), design)
     run.close()
-    return Asked(0, _reference_path(Path(out), 0), "initial")
+    return Asked(0, reference_path(Path(out), 0), "initial")
 
 
 def ask(
@@ -127,7 +126,7 @@ def ask(
         entries = live_pending(run)
         mine = next((entry for entry in entries if entry.robot == robot and entry.told is None), None)
         if mine is not None:
-            return Asked(mine.trial, _reference_path(run.path, mine.trial), mine.phase, again=True, robot=robot)
+            return Asked(mine.trial, reference_path(run.path, mine.trial), mine.phase, again=True, robot=robot)
         _check_room(out, task, entries)
         return _next_trial(run, task, entries, robot, on_refused)
     finally:
@@ -172,7 +171,7 @@ def _next_trial(run: RunDirectory, task: Task, entries: list[Pending], robot: st
             continue
         _write_reference(reference, run.path, number, objective.scene.gripper_opening)
         run.write_pending([*entries, Pending(number, phase, x, time.perf_counter() - start, time.time(), robot)])
-        return Asked(number, _reference_path(run.path, number), phase, robot=robot)
+        return Asked(number, reference_path(run.path, number), phase, robot=robot)
     return None
 
 
@@ -191,7 +190,7 @@ def tell(out: Path, signals_path: Path | None, failure: str | None = None, trial
         entries = live_pending(run)
         pending = to_tell(entries, Path(out), trial, signals_path)
         task = run.task()
-        reference = read_reference_csv(_reference_path(run.path, pending.trial))
+        reference = read_reference_csv(reference_path(run.path, pending.trial))
         if pending.trial == 0:
             if failure is not None:
                 raise RunError(f"{out}: the unoptimised skill (trial 0) cannot be told as failed: the run needs its signals to start")
@@ -256,12 +255,8 @@ def _check_follows(signals: Any, reference: Reference, errors: np.ndarray, toler
             )
 
 
-def _reference_path(run_dir: Path, trial: int) -> Path:
-    return exchange_folder(run_dir, trial) / REFERENCE_FILE
-
-
 def _write_reference(reference: Reference, run_dir: Path, trial: int, open_width: float) -> None:
-    path = _reference_path(run_dir, trial)
+    path = reference_path(run_dir, trial)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_reference_csv(reference, path, open_width)
 

@@ -26,7 +26,7 @@ from stl_lfd.optim.trials import Outcome, describe_error
 from stl_lfd.spelling import spelled
 
 RETRIES = 3  # times a trial whose worker process or node died is run again
-_built: dict[str, Any] = {}  # in a Ray worker process: the objective of the run it last served, by the run's key
+_built: tuple[str, Any] | None = None  # in a Ray worker process: the run it last served (its key) and that run's objective
 
 
 def connect(address: str | None) -> None:
@@ -66,31 +66,35 @@ def evaluate_trial(key: str, make_objective: Callable[[], Callable[[np.ndarray, 
     """In a Ray worker process: trial `trial` at `x` on the objective of the run `key` (built at
     the process's first trial of that run), or the message of its error."""
     try:  # a world that cannot be built (a scene file missing on this node) fails the trial, with why
-        objective = _built.get(key) or _objective_for(key, make_objective)
+        objective = _built[1] if _built is not None and _built[0] == key else _objective_for(key, make_objective)
         return objective(x, trial)
     except Exception as error:
         return describe_error(error)
 
 
 def _objective_for(key: str, make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]]) -> Callable[[np.ndarray, int], Outcome]:
+    """Build the objective of the run `key` in this process, in place of the previous run's."""
+    global _built
     import warnings
 
-    if not _built:  # the process's first run: as a local worker, the driver's proposal on the same node comes first
+    if _built is None:  # the process's first run: as a local worker, the driver's proposal on the same node comes first
         os.nice(WORKER_NICENESS)
         warnings.simplefilter("ignore")  # a task has no terminal: tracking warnings would be lost
-    for old in list(_built):  # one run's world at a time in a process
-        close = getattr(_built.pop(old), "close", None)
+    else:
+        close = getattr(_built[1], "close", None)
         if close is not None:
             close()
-    _built[key] = make_objective()
-    return _built[key]
+    objective = make_objective()
+    _built = (key, objective)
+    return objective
 
 
 class RayPool:
-    """Trials as Ray tasks, `workers` at once, each on the objective `make_objective()` builds
-    in the process that runs it (picklable), on the cluster at `address` (see `connect`)."""
+    """Trials as Ray tasks, each on the objective `make_objective()` builds in the process that
+    runs it (picklable), on the cluster at `address` (see `connect`). The trial loop hands it
+    batches of `workers` trials; Ray runs as many at once as the cluster has free CPUs."""
 
-    def __init__(self, make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]], workers: int, address: str | None) -> None:
+    def __init__(self, make_objective: Callable[[], Callable[[np.ndarray, int], Outcome]], address: str | None) -> None:
         connect(address)
         import ray
 

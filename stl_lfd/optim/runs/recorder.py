@@ -93,14 +93,14 @@ def finish_run(prepared: PreparedRun, on_trial: Callable[[Trial, Trial | None], 
 
 
 def trial_pool(prepared: PreparedRun, ray: str | None) -> Any:
-    """Who executes the trials of `prepared` besides this process: Ray actors on the cluster
+    """Who executes the trials of `prepared` besides this process: Ray tasks on the cluster
     `ray`, local worker processes when the task has several workers, or nobody (None)."""
     workers = prepared.task.optimizer.workers
     make_objective = ObjectiveFactory(prepared.task, prepared.models, prepared.run.path)
     if ray is not None:
         from stl_lfd.optim.runs.ray_workers import RayPool
 
-        return RayPool(make_objective, workers, ray)
+        return RayPool(make_objective, ray)
     if workers > 1:
         from stl_lfd.optim.runs.workers import WorkerPool
 

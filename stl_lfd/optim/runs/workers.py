@@ -40,10 +40,8 @@ _outbox: Path | None = None  # where the worker process writes its outcomes (`_h
 _busy = False  # whether the worker is evaluating a trial (a stop then unwinds it first)
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")  # one thread per worker
 WORKER_NICENESS = 10
-PARENT_CHECK_SECONDS = 1.0
-ERROR_MARK = (
-    "error: "  # an outcome handed back as its error message (`_handed_back`), not as a file  # how often a worker checks that the process that started it lives
-)
+PARENT_CHECK_SECONDS = 1.0  # how often a worker checks that the process that started it lives
+ERROR_MARK = "error: "  # an outcome handed back as its error message, not as a file (`_evaluate`)
 
 
 class WorkerPool:
@@ -88,7 +86,8 @@ class WorkerPool:
         return wait
 
     def taken_back(self, name: str) -> Outcome | str:
-        """The outcome a worker handed back in the file `name` (`_handed_back`), read once."""
+        """The outcome a worker handed back in the file `name` (`_handed_back`), read once, or
+        the error message `_evaluate` sent instead."""
         if name.startswith(ERROR_MARK):
             return name[len(ERROR_MARK) :]
         path = self.outbox / name
@@ -142,15 +141,12 @@ def _evaluate(x: np.ndarray, trial: int) -> str:
         outcome = describe_error(error)
     try:
         return _handed_back(outcome, trial)
-    except Exception as error:  # a full disk, say: the trial fails with why, the run goes on
-        return _handed_back(f"its outcome could not be handed back ({describe_error(error)})", trial, through_pipe=True)
+    except Exception as error:  # a full disk, say: the trial fails with why (short: through the pipe), the run goes on
+        return f"{ERROR_MARK}its outcome could not be handed back ({describe_error(error)})"
 
 
-def _handed_back(outcome: Outcome | str, trial: int, through_pipe: bool = False) -> str:
-    """The name of the file in the outbox that holds `outcome`, or (`through_pipe`, for an
-    error message, short) the message itself, marked as such."""
-    if through_pipe:
-        return ERROR_MARK + str(outcome)
+def _handed_back(outcome: Outcome | str, trial: int) -> str:
+    """The name of the file in the outbox that holds `outcome`."""
     assert _outbox is not None
     path = _outbox / f"trial-{trial}.pickle"
     partial = path.with_suffix(".partial")
