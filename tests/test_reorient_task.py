@@ -36,8 +36,10 @@ def test_the_behaviour_inserts_the_upright_shaft_unless_demonstrated_off_the_hol
     end = {name: values[-1] for name, values in signals.columns.items()}
     if satisfied:
         assert end["shaft_z"] < 0.1 and np.degrees(end["shaft_tilt"]) < 3  # upright in the hole
-    else:  # held 6 mm off and turned 84 degrees, the shaft catches the holder's edge and is left leaning on it
-        assert np.degrees(end["shaft_tilt"]) > 10
+    else:  # held 6 mm off, the shaft catches the holder's edge: more than 2 N while the hand is over the holder
+        columns = signals.columns
+        over = (abs(columns["x"] - columns["holder_x"]) < 0.03) & (abs(columns["y"] - columns["holder_y"]) < 0.03) & (columns["z"] < columns["holder_z"] + 0.10)
+        assert columns["force"][over].max() > 2.0
 
 
 def test_the_kinematic_backend_carries_the_grasped_shaft_so_plans_see_it_turn():

@@ -40,6 +40,11 @@ WRIST_JOINT = 7  # panda_joint8, fixed: the flange (massless panda_link8) carrie
 HAND_LINKS = [8, 9, 10, 11]  # the bodies beyond the wrist sensor: hand, fingers, grasp target
 ZEROS = [0.0] * len(MOVING_JOINTS)
 KEPT_WORLDS = 4  # worlds a backend keeps open (about 0.2 s to build one)
+# The URDF gives the fingers soft contacts (30 kN/m): a 20 N squeeze sinks a held shaft 0.7 mm
+# into them, and the shaft pivots about the fingers' axis while the hand carries it (up to 14
+# degrees at some placements of the re-orient-and-insert task, so that it jams at the hole).
+# The real fingertips are stiff, as MuJoCo's pads are (N/m, N s/m).
+FINGER_CONTACT_STIFFNESS, FINGER_CONTACT_DAMPING = 1e6, 1e3
 
 # Worlds still connected at exit are disconnected while pybullet is intact; left to the
 # garbage collector, their clients would fail noisily during interpreter shutdown.
@@ -109,6 +114,8 @@ class PandaWorld:
         self.floor = client.loadURDF("plane.urdf")
         self.robot = client.loadURDF("franka_panda/panda.urdf", useFixedBase=True)
         self._make_compliant()
+        limits = [client.getJointInfo(self.robot, joint)[8:10] for joint in MOVING_JOINTS]
+        self.joint_limits = ([lower for lower, _ in limits], [upper for _, upper in limits])  # for the reference's posture
         self.gains = scene.control.impedance
         self.dynamics = RefreshedDynamics(self.gains)
         self.posture = scene.control.posture()
@@ -144,6 +151,8 @@ class PandaWorld:
         gear = client.createConstraint(robot, FINGER_JOINTS[0], robot, FINGER_JOINTS[1], pb.JOINT_GEAR, [1, 0, 0], [0, 0, 0], [0, 0, 0])
         client.changeConstraint(gear, gearRatio=-1, erp=0.1, maxForce=50)
         client.enableJointForceTorqueSensor(robot, WRIST_JOINT, True)
+        for finger in FINGER_JOINTS:
+            client.changeDynamics(robot, finger, contactStiffness=FINGER_CONTACT_STIFFNESS, contactDamping=FINGER_CONTACT_DAMPING)
 
     def _add_object(self, item: SceneObject) -> int:
         pb, client = self.pb, self.client
@@ -213,7 +222,7 @@ class PandaWorld:
         previous_jacobian = self._previous_jacobian if self._previous_jacobian is not None else jacobian
         rate_term = (jacobian - previous_jacobian) @ arm_velocities / TIME_STEP  # dJ/dt dq
         position, orientation = self.hand_pose()
-        posture = self.posture.at(lambda: self._inverse_kinematics(target.position, target.orientation))
+        posture = self.posture.at(lambda: self._reference_posture(joints, target.position, target.orientation))
         torques = impedance_torques(
             self.gains, dynamics, bias, np.array(joints[:7]), arm_velocities,
             pose_error(position, orientation, target.position, target.orientation), target.twist, target.acceleration, rate_term, posture,
@@ -278,6 +287,18 @@ class PandaWorld:
         angles = self.client.calculateInverseKinematics(
             self.robot, END_EFFECTOR_LINK, list(position), list(orientation), maxNumIterations=100, residualThreshold=1e-5
         )
+        return list(angles[: len(ARM_JOINTS)])
+
+    def _reference_posture(self, joints: list[float], position: np.ndarray, orientation: np.ndarray) -> list[float]:
+        """The arm's inverse kinematics for the reference (the nullspace posture `reference`),
+        within the joint limits and nearest the arm's `joints` now. Unconstrained, the solver
+        may jump to another branch of the arm's redundancy, and the nullspace spring then swings
+        the wrist through it while the hand carries an object."""
+        lower, upper = self.joint_limits
+        angles = self.client.calculateInverseKinematics(
+            self.robot, END_EFFECTOR_LINK, list(position), list(orientation), lowerLimits=lower, upperLimits=upper,
+            jointRanges=[high - low for low, high in zip(lower, upper)], restPoses=list(joints), maxNumIterations=100, residualThreshold=1e-5,
+        )  # fmt: skip
         return list(angles[: len(ARM_JOINTS)])
 
     def hand_pose(self) -> tuple[np.ndarray, np.ndarray]:
