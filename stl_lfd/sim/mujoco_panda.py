@@ -105,8 +105,9 @@ class MujocoWorld:
         self, position: np.ndarray, orientation: np.ndarray, start: np.ndarray = REST_POSTURE, iterations: int = IK_ITERATIONS
     ) -> np.ndarray:
         """Arm joints that put the grasp target at `position` and `orientation`: damped least
-        squares from `start` (the rest posture), drawn towards the rest posture in the
-        nullspace, within joint limits, in at most `iterations` steps."""
+        squares from `start` (the rest posture), drawn towards `start` in the nullspace (the
+        reference's posture stays nearest the arm's posture now, as in PyBullet), within joint
+        limits, in at most `iterations` steps."""
         mj, model = self.mj, self.model
         if self._scratch is None:
             self._scratch = mj.MjData(model)
@@ -123,7 +124,7 @@ class MujocoWorld:
             mj.mj_jacSite(model, data, jacobian[:3], jacobian[3:], self.grasp_target)
             arm = jacobian[:, :7]
             inverse = arm.T @ np.linalg.inv(arm @ arm.T + 1e-6 * np.eye(6))
-            step = inverse @ error + (np.eye(7) - inverse @ arm) @ (0.1 * (REST_POSTURE - data.qpos[:7]))
+            step = inverse @ error + (np.eye(7) - inverse @ arm) @ (0.1 * (start - data.qpos[:7]))
             data.qpos[:7] = np.clip(data.qpos[:7] + step, model.jnt_range[:7, 0], model.jnt_range[:7, 1])
         return data.qpos[:7].copy()
 
