@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seed", type=int, default=20261204, help="the placements' generator seed")
     parser.add_argument("--demonstrated-yaws", action="store_true", help="turn the objects only within the demonstrations' yaws")
     parser.add_argument("--backend", default="pybullet", help="the simulator")
-    parser.add_argument("--nullspace-posture", default=None, help="the arm's nullspace posture, rest or reference (default: the scene's)")
+    parser.add_argument("--nullspace-posture", default=None, help="the arm's nullspace posture, rest or current (default: the scene's)")
     arguments = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     skill = PlacedSkill.load(BEHAVIOUR, duration=36.0)

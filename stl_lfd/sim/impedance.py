@@ -40,8 +40,8 @@ SINGULAR_DAMPING = 1e-4
 # unchanged to 0.01 mm (the Jacobian itself is fresh at every step).
 REFRESH_EVERY = 2
 # How the nullspace posture is chosen (`NullspacePosture`), and how often (control steps at
-# 240 Hz) the reference's posture is solved for: 10 Hz.
-NULLSPACE_POSTURES = ("rest", "reference")
+# 240 Hz) the `current` posture is taken again: 10 Hz.
+NULLSPACE_POSTURES = ("rest", "current")
 POSTURE_EVERY = 24
 _EYE6, _EYE7 = np.eye(6), np.eye(7)
 
@@ -188,11 +188,13 @@ def impedance_torques(
 
 class NullspacePosture:
     """The joints the nullspace spring pulls towards: the fixed `rest` posture (franka's example
-    controller holds its initial one), or (`reference`) the arm's inverse kinematics for the
-    reference, solved every `POSTURE_EVERY` control steps. With the rest posture, a hand turned
-    far from it (the re-orient-and-insert task with the holder turned by 120 degrees) can drag
-    the arm into a joint limit, where it no longer follows the reference; the reference's own
-    posture keeps the arm where a position-controlled arm's inverse kinematics would hold it."""
+    controller holds its initial one), or the arm's `current` posture, taken again every
+    `POSTURE_EVERY` control steps, so that the spring only holds the arm near where it was a
+    moment ago. With the rest posture, a hand turned far from it (the re-orient-and-insert task
+    with the holder turned by 120 degrees) can drag the arm into a joint limit, where it no longer
+    follows the reference. An inverse kinematics of the reference solved anew as the posture did
+    no better: PyBullet's may jump to another branch of the arm's redundancy, and the spring then
+    swings the wrist through it while the hand carries an object."""
 
     def __init__(self, mode: str = "rest") -> None:
         self.mode = mode
@@ -201,11 +203,10 @@ class NullspacePosture:
     def restart(self) -> None:
         self.posture, self.steps = REST_POSTURE, 0
 
-    def at(self, solve: Callable[[], np.ndarray]) -> np.ndarray:
-        """`7`: the posture for this control step; `solve()` gives the inverse kinematics of
-        the step's target (called only when the posture is refreshed)."""
-        if self.mode == "reference" and self.steps % POSTURE_EVERY == 0:
-            self.posture = np.asarray(solve(), dtype=float)
+    def at(self, joints: np.ndarray) -> np.ndarray:
+        """`7`: the posture for this control step, given the arm's `7` joints now."""
+        if self.mode == "current" and self.steps % POSTURE_EVERY == 0:
+            self.posture = np.array(joints, dtype=float)
         self.steps += 1
         return self.posture
 

@@ -31,7 +31,6 @@ from stl_lfd.sim.world import GRAVITY, FrameTracker, Target, external_wrench, lo
 PHYSICS_STEP = TIME_STEP / PHYSICS_STEPS
 KEPT_WORLDS = 4  # compiled scenes a backend keeps (rollouts over many placements keep a few)
 IK_ITERATIONS = 200
-POSTURE_ITERATIONS = 20  # from the arm's posture now, a few steps reach the reference's (10 Hz)
 OPENGL_ADVICE = "install its OpenGL library (Debian: libegl1 for MUJOCO_GL=egl, libosmesa6 for osmesa) or set MUJOCO_GL=egl"
 
 
@@ -101,21 +100,18 @@ class MujocoWorld:
         self.posture.restart()
         self._wrench = self._measured_wrench()
 
-    def _inverse_kinematics(
-        self, position: np.ndarray, orientation: np.ndarray, start: np.ndarray = REST_POSTURE, iterations: int = IK_ITERATIONS
-    ) -> np.ndarray:
+    def _inverse_kinematics(self, position: np.ndarray, orientation: np.ndarray) -> np.ndarray:
         """Arm joints that put the grasp target at `position` and `orientation`: damped least
-        squares from `start` (the rest posture), drawn towards `start` in the nullspace (the
-        reference's posture stays nearest the arm's posture now, as in PyBullet), within joint
-        limits, in at most `iterations` steps."""
+        squares from the rest posture, drawn towards it in the nullspace, within joint limits, in
+        at most `IK_ITERATIONS` steps."""
         mj, model = self.mj, self.model
         if self._scratch is None:
             self._scratch = mj.MjData(model)
         data = self._scratch
         data.qpos[:] = 0.0
-        data.qpos[:7] = start
+        data.qpos[:7] = REST_POSTURE
         jacobian = np.zeros((6, model.nv))
-        for _ in range(iterations):
+        for _ in range(IK_ITERATIONS):
             mj.mj_kinematics(model, data)
             mj.mj_comPos(model, data)
             error = -pose_error(data.site_xpos[self.grasp_target], self._site_orientation(data), position, orientation)
@@ -124,7 +120,7 @@ class MujocoWorld:
             mj.mj_jacSite(model, data, jacobian[:3], jacobian[3:], self.grasp_target)
             arm = jacobian[:, :7]
             inverse = arm.T @ np.linalg.inv(arm @ arm.T + 1e-6 * np.eye(6))
-            step = inverse @ error + (np.eye(7) - inverse @ arm) @ (0.1 * (start - data.qpos[:7]))
+            step = inverse @ error + (np.eye(7) - inverse @ arm) @ (0.1 * (REST_POSTURE - data.qpos[:7]))
             data.qpos[:7] = np.clip(data.qpos[:7] + step, model.jnt_range[:7, 0], model.jnt_range[:7, 1])
         return data.qpos[:7].copy()
 
@@ -149,7 +145,7 @@ class MujocoWorld:
             centre = data.xipos[self.movable[self.load]]
             bias += load_torques(dynamics.jacobian, data.site_xpos[self.grasp_target], centre, self.masses[self.load])
         error = pose_error(data.site_xpos[self.grasp_target], self._site_orientation(data), target.position, target.orientation)
-        posture = self.posture.at(lambda: self._inverse_kinematics(target.position, target.orientation, data.qpos[:7], POSTURE_ITERATIONS))
+        posture = self.posture.at(data.qpos[:7])
         data.ctrl[:7] = impedance_torques(
             self.gains, dynamics, bias, data.qpos[:7], data.qvel[:7], error, target.twist, target.acceleration, rate_term, posture
         )

@@ -114,8 +114,6 @@ class PandaWorld:
         self.floor = client.loadURDF("plane.urdf")
         self.robot = client.loadURDF("franka_panda/panda.urdf", useFixedBase=True)
         self._make_compliant()
-        limits = [client.getJointInfo(self.robot, joint)[8:10] for joint in MOVING_JOINTS]
-        self.joint_limits = ([lower for lower, _ in limits], [upper for _, upper in limits])  # for the reference's posture
         self.gains = scene.control.impedance
         self.dynamics = RefreshedDynamics(self.gains)
         self.posture = scene.control.posture()
@@ -222,11 +220,9 @@ class PandaWorld:
         previous_jacobian = self._previous_jacobian if self._previous_jacobian is not None else jacobian
         rate_term = (jacobian - previous_jacobian) @ arm_velocities / TIME_STEP  # dJ/dt dq
         position, orientation = self.hand_pose()
-        posture = self.posture.at(lambda: self._reference_posture(joints, target.position, target.orientation))
-        torques = impedance_torques(
-            self.gains, dynamics, bias, np.array(joints[:7]), arm_velocities,
-            pose_error(position, orientation, target.position, target.orientation), target.twist, target.acceleration, rate_term, posture,
-        )  # fmt: skip
+        arm_joints, error = np.array(joints[:7]), pose_error(position, orientation, target.position, target.orientation)
+        posture = self.posture.at(arm_joints)
+        torques = impedance_torques(self.gains, dynamics, bias, arm_joints, arm_velocities, error, target.twist, target.acceleration, rate_term, posture)
         client.setJointMotorControlArray(self.robot, ARM_JOINTS, self.pb.TORQUE_CONTROL, forces=torques.tolist())
         finger_force = self.scene.control.finger_force
         client.setJointMotorControlArray(
@@ -287,18 +283,6 @@ class PandaWorld:
         angles = self.client.calculateInverseKinematics(
             self.robot, END_EFFECTOR_LINK, list(position), list(orientation), maxNumIterations=100, residualThreshold=1e-5
         )
-        return list(angles[: len(ARM_JOINTS)])
-
-    def _reference_posture(self, joints: list[float], position: np.ndarray, orientation: np.ndarray) -> list[float]:
-        """The arm's inverse kinematics for the reference (the nullspace posture `reference`),
-        within the joint limits and nearest the arm's `joints` now. Unconstrained, the solver
-        may jump to another branch of the arm's redundancy, and the nullspace spring then swings
-        the wrist through it while the hand carries an object."""
-        lower, upper = self.joint_limits
-        angles = self.client.calculateInverseKinematics(
-            self.robot, END_EFFECTOR_LINK, list(position), list(orientation), lowerLimits=lower, upperLimits=upper,
-            jointRanges=[high - low for low, high in zip(lower, upper)], restPoses=list(joints), maxNumIterations=100, residualThreshold=1e-5,
-        )  # fmt: skip
         return list(angles[: len(ARM_JOINTS)])
 
     def hand_pose(self) -> tuple[np.ndarray, np.ndarray]:

@@ -54,7 +54,7 @@ def test_a_user_scene_file_with_objects(tmp_path):
         ("description: d\ncontrol: {translational_stiffness: 1e9}\n", r"'control.translational_stiffness' must be at most 5000"),
         ("description: d\ncontrol: {rotational_stiffness: -1}\n", r"'control.rotational_stiffness' must be positive"),
         ("description: d\ncontrol: {finger_force: 500}\n", r"'control.finger_force' must be at most 140"),
-        ("description: d\ncontrol: {nullspace_posture: ik}\n", r"'control.nullspace_posture' must be one of rest, reference \(got 'ik'\)"),
+        ("description: d\ncontrol: {nullspace_posture: ik}\n", r"'control.nullspace_posture' must be one of rest, current \(got 'ik'\)"),
         ("description: d\ncontrol: {torque_limits: [87, 87, 87, 87, 12, 12, 100]}\n", r"'control.torque_limits' must be positive and at most the Panda's"),
         ("description: d\nobjects:\n  - {name: a, shape: cone, size: [1], position: [0, 0, 0]}\n", r"'objects\[0\].shape' must be one of"),
         ("description: d\nobjects:\n  - {name: a, shape: box, size: [1, 1], position: [0, 0, 0]}\n", r"'objects\[0\].size' must be a list of 3"),
