@@ -67,11 +67,11 @@ def test_the_symmetric_shaft_and_hole_are_inserted_at_yaws_never_demonstrated():
 
 
 @pytest.mark.slow
-def test_a_nullspace_that_holds_no_posture_keeps_the_arm_out_of_a_joint_limit():
+def test_holding_the_arms_own_posture_keeps_it_out_of_a_joint_limit():
     """The first of bench_reorient's unseen placements (the holder turned by 120 degrees): with
     the rest posture in its nullspace the compliant arm runs joint 2 into its limit and leaves
-    the shaft on the rim 14 cm from the hole's axis; with the arm's current posture (no pull)
-    it inserts it."""
+    the shaft on the rim 14 cm from the hole's axis; holding the arm's own posture
+    (`current`, taken again at 10 Hz) it inserts it."""
     import dataclasses
 
     from benchmarks.bench_reorient import placements

@@ -91,8 +91,8 @@ class RunView:
         stamp = tuple(_stat(self.path / name) for name in WATCHED)
         if stamp == self._stamp and self.version > 0:
             return False
-        if self._stamp and (stamp[0] != self._stamp[0] or stamp[1][2] != self._stamp[1][2] or stamp[1][0] < self._offset):
-            self.task, self.trials, self._offset = {}, [], 0  # task.yaml or trials.jsonl replaced: another run moved in
+        if self._stamp and self._moved_in(stamp):
+            self.task, self.trials, self._offset = {}, [], 0
         self._stamp = stamp
         self.problem = ""
         try:
@@ -101,6 +101,12 @@ class RunView:
             self.problem = str(error) or type(error).__name__
         self.version += 1
         return True
+
+    def _moved_in(self, stamp: tuple) -> bool:
+        """Whether another run moved in since the last refresh: task.yaml changed, or
+        trials.jsonl is another file (`_stat`: size, mtime, inode) or shorter than what was read."""
+        (task, trials), (old_task, old_trials) = stamp[:2], self._stamp[:2]
+        return task != old_task or trials[2] != old_trials[2] or trials[0] < self._offset
 
     def _read(self) -> None:
         if not self.task:

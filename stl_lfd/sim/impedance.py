@@ -10,7 +10,8 @@ where `e` is the hand's pose error (position, and rotation vector of the orienta
 the base frame), `v = J dq` its twist, `K` the translational and rotational stiffness, `D`
 critically damped for the operational-space inertia `Lambda = (J M^-1 J^T)^-1`, `b` gravity
 and Coriolis (compensated, as the robot's firmware does), and `tau_posture` a weak joint spring
-towards the rest posture in the nullspace of the task (`J#` the dynamically consistent inverse).
+towards a posture (`NullspacePosture`) in the nullspace of the task (`J#` the dynamically
+consistent inverse).
 The reference is tracked by moving the equilibrium pose along it, with its velocity `v_d` and
 acceleration `a_d` fed forward, so that the arm follows a moving reference without lag and
 yields to contact like a spring of stiffness `K`. Torques are clipped to the real arm's limits.

@@ -62,8 +62,6 @@ def test_only_objects_that_moved_get_a_path():
 
 
 def test_damaged_files_of_every_kind_are_shown_and_never_break_a_page(runs_folder, tmp_path):
-    import pytest
-
     damages = {
         "pending": ("pending.json", '{"pending": null}'),
         "optimizer": ("task.yaml", "name: x\noptimizer: cmaes\n"),
@@ -86,5 +84,4 @@ def test_damaged_files_of_every_kind_are_shown_and_never_break_a_page(runs_folde
     runs, sweeps, _ = index_signature(board)
     rows = words(index_content(board, runs, sweeps))
     assert rows.count("damaged:") == 4, rows
-    with pytest.raises(AssertionError):  # the paths a page sends back are the folder's only
-        assert board.resolve("../../etc") is not None
+    assert board.resolve("../../etc") is None  # the paths a page sends back are the folder's only

@@ -71,7 +71,7 @@ class WorkerPool:
             futures = [self.pool.submit(_evaluate, x, trial) for x, trial in points]
         except BrokenProcessPool:  # a worker died on a trial submitted before these
             self.stop()
-            raise died([], "a worker process died (killed, or crashed)") from None
+            raise died([]) from None
 
         def wait() -> list[Outcome | str]:
             try:
