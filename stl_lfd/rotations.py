@@ -131,9 +131,17 @@ def continuous(q: np.ndarray) -> np.ndarray:
     """`T x 4` quaternions with signs flipped where needed so that each is on the same side as
     the one before (q and -q are the same rotation; a path on S^3 must not jump between them)."""
     q = np.array(q, dtype=float)
-    for index in range(1, len(q)):
-        if q[index] @ q[index - 1] < 0:
-            q[index] = -q[index]
+    if len(q) < 2:
+        return q
+    # Sample i is flipped when its product with sample i - 1 *as left* is negative, which is
+    # the product with the original sample i - 1, negated if that one was flipped: so the flips
+    # alternate with every negative product and start over (unflipped) where it is 0 or NaN.
+    products = np.einsum("ij,ij->i", q[1:], q[:-1])
+    negative, restarts = products < 0, ~((products < 0) | (products > 0))
+    count = np.concatenate(([0], np.cumsum(negative)))
+    restart_at = np.maximum.accumulate(np.where(np.concatenate(([True], restarts)), np.arange(len(q)), 0))
+    flipped = (count - count[restart_at]) % 2 == 1
+    q[flipped] = -q[flipped]
     return q
 
 
