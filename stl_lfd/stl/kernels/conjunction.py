@@ -32,21 +32,24 @@ def new_conjunction(values: np.ndarray, nu: float) -> np.ndarray:
     minimum = values.min(axis=-1, keepdims=True)  # ... x 1
     finite_minimum = np.isfinite(minimum)
     safe_minimum = np.where(finite_minimum & (minimum != 0), minimum, 1.0)
-    finite = np.isfinite(values)
-    all_finite = bool(finite.all())
+    all_finite = bool(finite_minimum.all()) and bool(np.isfinite(values.max()))  # two reductions, no mask
+    finite = None if all_finite else np.isfinite(values)
     safe_values = values if all_finite else np.where(finite, values, 0.0)
     with np.errstate(over="ignore", invalid="ignore"):
         # relative <= 0 for every finite operand where rho_min < 0, >= 0 where rho_min > 0: either
         # way exp(-nu |relative|) is the branch's weight (bit for bit), +inf operands drop out.
-        distance = np.abs((safe_values - safe_minimum) / safe_minimum)  # ... x m
+        # The ... x m temporaries are reused in place: these arrays are the kernels' largest.
+        distance = np.subtract(safe_values, safe_minimum)
+        distance /= safe_minimum
+        np.abs(distance, out=distance)
         ratios = None if nu == 1 else np.exp(-distance)  # exp(relative) of the negative branch
-        weights = np.exp(np.multiply(-nu, distance, out=distance))
+        weights = np.exp(np.multiply(-nu, distance, out=distance), out=distance)
         if not all_finite:
             weights[~finite] = 0.0
-        ratios = weights if ratios is None else ratios
         totals = np.sum(weights, axis=-1)
-        negative = safe_minimum[..., 0] * np.sum(weights * ratios, axis=-1) / totals
-        positive = np.sum(safe_values * weights, axis=-1) / totals
+        product = np.multiply(weights, weights if ratios is None else ratios, out=ratios)
+        negative = safe_minimum[..., 0] * np.sum(product, axis=-1) / totals
+        positive = np.sum(np.multiply(safe_values, weights, out=product), axis=-1) / totals
     minimum = minimum[..., 0]
     result = np.where(minimum > 0, positive, np.where(minimum < 0, negative, 0.0))
     return np.where(np.isfinite(minimum), result, minimum)
