@@ -137,7 +137,8 @@ def continuous(q: np.ndarray) -> np.ndarray:
     # the product with the original sample i - 1, negated if that one was flipped: so the flips
     # alternate with every negative product and start over (unflipped) where it is 0 or NaN.
     products = np.einsum("ij,ij->i", q[1:], q[:-1])
-    negative, restarts = products < 0, ~((products < 0) | (products > 0))
+    negative = products < 0
+    restarts = ~(negative | (products > 0))
     count = np.concatenate(([0], np.cumsum(negative)))
     restart_at = np.maximum.accumulate(np.where(np.concatenate(([True], restarts)), np.arange(len(q)), 0))
     flipped = (count - count[restart_at]) % 2 == 1
