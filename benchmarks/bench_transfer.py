@@ -7,10 +7,11 @@ execution still satisfies the spec. On the contact tasks the target execution is
 physically (`benchmarks.physical`: the shaft ends in the hole, never flung).
 
     python -m benchmarks.bench_transfer [--tasks phi1,phi2,phi3_reorient] [--seeds 0-9]
-        [--directions pybullet:mujoco,mujoco:pybullet] [--jobs 1]
+        [--directions pybullet:mujoco,mujoco:pybullet] [--jobs 1] [--robot LABEL]
         [--out benchmarks/results/transfer.jsonl]
 
-One JSON line per run (task, direction, seed) is appended to --out, with the commit. About a
+One JSON line per run (task, direction, seed) is appended to --out, with the commit and the
+robot's label (the results page keeps robots apart). About a
 minute per free-space run and two per contact run on one core.
 """
 
@@ -30,6 +31,7 @@ ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "transfer.jsonl"
 TASKS = ("phi1", "phi2", "phi3_reorient")
 DIRECTIONS = ("pybullet:mujoco", "mujoco:pybullet")
+ROBOT = "compliant, stiff fingertips"
 
 
 def one_transfer(job: tuple[str, str, str, int]) -> dict[str, Any]:
@@ -100,11 +102,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seeds", default="0-9", help="e.g. 0-9, 3 or 0-4,7")
     parser.add_argument("--directions", default=",".join(DIRECTIONS), help="SOURCE:TARGET engine pairs")
     parser.add_argument("--jobs", type=int, default=1, help="runs side by side (spawned processes)")
+    parser.add_argument("--robot", default=ROBOT, help=f"a label of the robots and their control, recorded with each line (default: {ROBOT!r})")
     parser.add_argument("--out", type=Path, default=RESULTS, help="the JSON-lines file the results are appended to")
     args = parser.parse_args(argv)
     jobs = [(task, *direction.split(":"), seed) for task in args.tasks.split(",") for direction in args.directions.split(",") for seed in seed_list(args.seeds)]
     results, start = [], time.perf_counter()
-    for line in recorded_results(one_transfer, jobs, args.jobs, args.out, {"commit": commit()}):
+    for line in recorded_results(one_transfer, jobs, args.jobs, args.out, {"commit": commit(), "robot": args.robot}):
         results.append(line)
         print(
             f"{line['task']} {line['source']} -> {line['target']} seed {line['seed']}: "

@@ -169,12 +169,12 @@ def contact_page(records_path: Path) -> str:
 
 
 def transfer_page(records_path: Path) -> str:
-    """Per task and direction, over the recorded seeds: whether the best trial found on one
-    engine still satisfies its spec on the other."""
+    """Per robot, task and direction, over the recorded seeds: whether the best trial found on
+    one engine still satisfies its spec on the other."""
     name = records_path.relative_to(ROOT).as_posix()
-    groups: dict[tuple[str, str, str], list[dict]] = defaultdict(list)
+    groups: dict[tuple[str, str, str, str], list[dict]] = defaultdict(list)
     for record in _recorded(records_path):
-        groups[(record["task"], record["source"], record["target"])].append(record)
+        groups[(record.get("robot", "compliant, before the stiff fingertips"), record["task"], record["source"], record["target"])].append(record)
     lines = [
         "# `transfer.jsonl`",
         "",
@@ -183,20 +183,30 @@ def transfer_page(records_path: Path) -> str:
         f"Generated from `{name}` by `python -m benchmarks.results_pages`. Each record is one optimisation run on the "
         "source engine (`python -m benchmarks.bench_transfer`: the task as bundled, its backend replaced) whose best trial "
         "is then executed once on the target engine and scored by the same spec; on the contact tasks the target's execution "
-        "is also checked physically (`benchmarks/physical.py`). Counts over the seeds listed.",
+        "is also checked physically (`benchmarks/physical.py`). Counts over the seeds listed, per robot.",
         "",
-        "| task | from | to | seeds | satisfied on the source | still satisfied on the target | phys. inserted on the target |",
-        "|---|---|---|---|---|---|---|",
     ]
-    for (task, source, target), runs in groups.items():
-        seeds = sorted({run["seed"] for run in runs})
-        solved = [run for run in runs if run["source_robustness"] is not None and run["source_robustness"] > 0]
-        kept = sum(run["target_robustness"] is not None and run["target_robustness"] > 0 for run in solved)
-        inserted = [run["target_physically_inserted"] for run in solved if "target_physically_inserted" in run]
-        shown = f"{sum(inserted)}/{len(inserted)}" if inserted else "-"
-        lines.append(f"| {task} | {source} | {target} | {_seed_list(seeds)} | {len(solved)}/{len(runs)} | {kept}/{len(solved)} | {shown} |")
-    lines.append("")
+    for robot in dict.fromkeys(key[0] for key in groups):
+        lines += [
+            f"## {robot}",
+            "",
+            "| task | from | to | seeds | satisfied on the source | still satisfied on the target | phys. inserted on the target |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for (label, task, source, target), runs in groups.items():
+            if label == robot:
+                lines.append(_transfer_row(task, source, target, runs))
+        lines.append("")
     return "\n".join(lines)
+
+
+def _transfer_row(task: str, source: str, target: str, runs: list[dict]) -> str:
+    seeds = sorted({run["seed"] for run in runs})
+    solved = [run for run in runs if run["source_robustness"] is not None and run["source_robustness"] > 0]
+    kept = sum(run["target_robustness"] is not None and run["target_robustness"] > 0 for run in solved)
+    inserted = [run["target_physically_inserted"] for run in solved if "target_physically_inserted" in run]
+    shown = f"{sum(inserted)}/{len(inserted)}" if inserted else "-"
+    return f"| {task} | {source} | {target} | {_seed_list(seeds)} | {len(solved)}/{len(runs)} | {kept}/{len(solved)} | {shown} |"
 
 
 def _seed_list(seeds: list[int]) -> str:
