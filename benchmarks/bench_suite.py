@@ -2,7 +2,7 @@
 many seeds.
 
     python -m benchmarks.bench_suite [--problems P ...] [--methods M ...] [--seeds 10]
-                                     [--jobs 2] [--table] [--search N]
+                                     [--jobs 2] [--table] [--search N [--hold I=U ...]]
 
 Each problem is a task file in `benchmarks/problems/` (its budget is the file's `trials`).
 Methods: the tool's `stl`, `pi`, `logei` and `random`, run exactly as `stlopt optimize` runs
@@ -11,7 +11,9 @@ sampler driving the same objective (`pip install optuna`; it is a benchmark extr
 dependency of the tool). Every finished run is one line of `benchmarks/results/suite.jsonl`;
 runs already there are not repeated, so the suite can be stopped and extended. `--table` only
 prints the table of what is recorded. `--search N` runs N uniform random points per problem
-(the large-budget check that a satisfying point exists) into `results/search.jsonl`.
+(the large-budget check that a satisfying point exists) into `results/search.jsonl`;
+`--hold INDEX=VALUE` (repeatable) holds unit coordinates fixed, a search directed to where
+the problem's structure says the solutions are.
 
 `PROBLEM+lag` runs a kinematic problem with a robot's tracking error (`LaggingBackend`), so
 that the execution is not the plan that method `plan` scores; `PROBLEM+VARIANT` with a robot of
@@ -287,8 +289,11 @@ def _run_tpe(task, seed: int) -> tuple[list[dict], float]:
     return trials, initial
 
 
-def random_search(problem: str, points: int, seed: int = 12345) -> dict:
-    """The best of `points` uniform random points: evidence that the problem can be solved."""
+def random_search(problem: str, points: int, seed: int = 12345, held: dict[int, float] | None = None) -> dict:
+    """The best of `points` uniform random points: evidence that the problem can be solved.
+
+    `held` fixes unit coordinates (index -> value in [0, 1]) in every point: a search directed
+    to where the problem's structure says the solutions are (recorded as `directed`)."""
     warnings.simplefilter("ignore")
     from stl_lfd.optim import load_task
     from stl_lfd.optim.objective import objective_for, task_models
@@ -297,7 +302,12 @@ def random_search(problem: str, points: int, seed: int = 12345) -> dict:
     models = task_models(task)
     with executed_as(problem):
         space, objective = objective_for(task, models)
+    held = held or {}
+    if any(not 0 <= index < space.dimension for index in held):
+        raise ValueError(f"{problem}: --hold indices must be in 0..{space.dimension - 1}")
     unit = np.random.default_rng(seed).random((points, space.dimension))
+    for index, value in held.items():
+        unit[:, index] = value
     values = []
     for row in unit:
         try:
@@ -305,18 +315,33 @@ def random_search(problem: str, points: int, seed: int = 12345) -> dict:
         except Exception:
             continue
     best = int(np.argmax(values))
-    return {
+    record = {
         "problem": problem,
         "points": points,
         "best_robustness": values[best],
         "best_unit_point": [round(float(v), 4) for v in unit[best]],
         "satisfied_fraction": float(np.mean(np.array(values) > 0)),
     }
+    if held:
+        record["directed"] = "unit coordinates held: " + ", ".join(f"{index} at {value}" for index, value in sorted(held.items()))
+    return record
+
+
+def held_coordinate(text: str) -> tuple[int, float]:
+    """`--hold INDEX=VALUE`: a unit coordinate the search holds fixed."""
+    index, _, value = text.partition("=")
+    try:
+        held = int(index), float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected INDEX=VALUE, e.g. 17=1.0") from None
+    if not 0 <= held[1] <= 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: a unit coordinate is within 0 and 1")
+    return held
 
 
 def _search_note(search: dict | None) -> str:
     """The table's `search best` cell: the best robustness and how many points satisfied the
-    spec, of a uniform search or (`directed`, recorded by hand with its description) of a
+    spec, of a uniform search or (`directed`: with coordinates held, or described by hand) of a
     search where the problem's structure says the solutions are."""
     if search is None:
         return ""
@@ -344,8 +369,9 @@ def _run_safely(job: tuple[str, str, int]) -> dict:
         return {"error": f"{type(error).__name__}: {error}"}
 
 
-def _search(job: tuple[str, int]) -> dict:
-    return random_search(*job)
+def _search(job: tuple[str, int, dict[int, float]]) -> dict:
+    problem, points, held = job
+    return random_search(problem, points, held=held)
 
 
 def run_suite(problems: list[str], methods: list[str], seeds: list[int], jobs: int, results: Path = RESULTS) -> None:
@@ -502,6 +528,14 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--table", action="store_true", help="only print the table of recorded runs")
     parser.add_argument("--search", type=int, default=0, help="random points per problem for the existence check")
+    parser.add_argument(
+        "--hold",
+        type=held_coordinate,
+        action="append",
+        default=[],
+        metavar="INDEX=VALUE",
+        help="with --search: hold this unit coordinate fixed in every point (repeatable)",
+    )
     parser.add_argument("--markdown", action="store_true", help="print the table in Markdown")
     parser.add_argument(
         "--results",
@@ -514,9 +548,13 @@ def main(argv: list[str] | None = None) -> None:
     if not args.table and any("@" in method for method in args.methods):
         parser.error("METHOD@LABEL names records of earlier code: use it with --table")
     if args.search:
-        for _, record in local_map(_search, [(problem, args.search) for problem in args.problems], args.jobs):
-            _append(SEARCH_RESULTS, record)
-            Console(stderr=True).print(record)
+        held = dict(args.hold)
+        try:
+            for _, record in local_map(_search, [(problem, args.search, held) for problem in args.problems], args.jobs):
+                _append(SEARCH_RESULTS, record)
+                Console(stderr=True).print(record)
+        except ValueError as error:
+            parser.error(str(error))
     elif not args.table:
         run_suite(args.problems, args.methods, seeds, args.jobs, args.results)
     print_table(args.problems, args.methods, seeds, args.markdown, args.results)

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from benchmarks.bench_suite import main, paired_firsts, summarise
+from benchmarks.bench_suite import main, paired_firsts, random_search, summarise
 
 
 def _record(problem: str, method: str, seed: int, first: int | None) -> dict:
@@ -55,3 +55,21 @@ def test_a_contact_problems_runs_are_counted_against_the_physical_check(tmp_path
     row = summarise(["phi3_strict_final"], ["plan"], results=path)[0]
     # seed 0's best (0.02) is not inserted; seed 1's (0.03) is; trial 3 of seed 0 is satisfied but not inserted
     assert row["satisfied & inserted"] == "1/2" and row["verdict agrees"] == "4/5 trials"
+
+
+def test_a_directed_search_holds_its_coordinates_in_every_point():
+    record = random_search("phi1_first", 3, held={0: 0.25, 5: 1.0})
+    assert record["best_unit_point"][0] == 0.25 and record["best_unit_point"][5] == 1.0
+    assert record["directed"] == "unit coordinates held: 0 at 0.25, 5 at 1.0"
+    assert record["points"] == 3 and 0 <= record["satisfied_fraction"] <= 1
+
+
+def test_a_held_coordinate_outside_the_unit_box_is_refused(capsys):
+    with pytest.raises(SystemExit):
+        main(["--problems", "phi1_first", "--search", "3", "--hold", "2=1.5"])
+    assert "a unit coordinate is within 0 and 1" in capsys.readouterr().err
+
+
+def test_a_held_coordinate_beyond_the_problems_dimension_is_refused():
+    with pytest.raises(ValueError, match=r"phi1_first: --hold indices must be in 0\.\.11"):
+        random_search("phi1_first", 1, held={12: 0.5})
