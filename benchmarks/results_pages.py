@@ -154,6 +154,11 @@ def contact_page(records_path: Path) -> str:
         "that check; a dash marks a count that earlier records did not make. Sums over the seeds listed; the last two "
         "columns count runs (a run is satisfied when its best trial is).",
         "",
+        "The sections run from the oldest robot to the shipped one, the last. A `(compliant)` label without `stiff fingertips` "
+        "is the compliant robot before its fingertips' contacts were made stiff and its nullspace posture became the arm's "
+        "own; `outcome specs` marks the records made with the tasks' outcome specs (the shaft ends in the hole, upright, and "
+        "is never flung).",
+        "",
     ]
     for robot in dict.fromkeys(key[0] for key in groups):
         lines += [f"## {robot}", "", "| task | method | seeds | " + " | ".join(title for _, title in CONTACT_COUNTS) + " |"]
