@@ -547,6 +547,8 @@ def main(argv: list[str] | None = None) -> None:
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     if not args.table and any("@" in method for method in args.methods):
         parser.error("METHOD@LABEL names records of earlier code: use it with --table")
+    if args.hold and not args.search:
+        parser.error("--hold holds coordinates of a search: use it with --search N")
     if args.search:
         held = dict(args.hold)
         try:

@@ -11,8 +11,8 @@ physically (`benchmarks.physical`: the shaft ends in the hole, never flung).
         [--out benchmarks/results/transfer.jsonl]
 
 One JSON line per run (task, direction, seed) is appended to --out, with the commit and the
-robot's label (the results page keeps robots apart). About a
-minute per free-space run and two per contact run on one core.
+robot's label (the results page keeps robots apart). About one to three minutes per
+free-space run and five to fifteen per phi3_reorient run on one core.
 """
 
 from __future__ import annotations

@@ -68,6 +68,9 @@ def test_a_held_coordinate_outside_the_unit_box_is_refused(capsys):
     with pytest.raises(SystemExit):
         main(["--problems", "phi1_first", "--search", "3", "--hold", "2=1.5"])
     assert "a unit coordinate is within 0 and 1" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["--problems", "phi1_first", "--hold", "2=0.5"])
+    assert "use it with --search N" in capsys.readouterr().err
 
 
 def test_a_held_coordinate_beyond_the_problems_dimension_is_refused():
