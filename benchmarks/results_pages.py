@@ -20,6 +20,7 @@ import argparse
 import sys
 from collections import Counter, defaultdict
 from pathlib import Path
+from typing import Callable
 
 from benchmarks.bench_suite import METHODS, ROOT, SEARCH_RESULTS, _recorded, _search_note, paired_firsts, shown_columns, summarise
 
@@ -160,17 +161,13 @@ def contact_page(records_path: Path) -> str:
         "is never flung).",
         "",
     ]
-    for robot in dict.fromkeys(key[0] for key in groups):
-        lines += [f"## {robot}", "", "| task | method | seeds | " + " | ".join(title for _, title in CONTACT_COUNTS) + " |"]
-        lines.append("|" + "---|" * (3 + len(CONTACT_COUNTS)))
-        for (label, task, method), runs in groups.items():
-            if label != robot:
-                continue
-            seeds = sorted({run["seed"] for run in runs})
-            counts = [str(sum(int(run[key]) for run in runs)) if all(key in run for run in runs) else "-" for key, _ in CONTACT_COUNTS]
-            lines.append(f"| {task} | {method} | {_seed_list(seeds)} | " + " | ".join(counts) + " |")
-        lines.append("")
-    return "\n".join(lines)
+    columns = ["task", "method", "seeds", *(title for _, title in CONTACT_COUNTS)]
+    return "\n".join(lines + _robot_sections(groups, columns, _contact_row))
+
+
+def _contact_row(task: str, method: str, runs: list[dict]) -> list[str]:
+    counts = [str(sum(int(run[key]) for run in runs)) if all(key in run for run in runs) else "-" for key, _ in CONTACT_COUNTS]
+    return [task, method, _seed_list(sorted({run["seed"] for run in runs})), *counts]
 
 
 def transfer_page(records_path: Path) -> str:
@@ -191,27 +188,28 @@ def transfer_page(records_path: Path) -> str:
         "is also checked physically (`benchmarks/physical.py`). Counts over the seeds listed, per robot.",
         "",
     ]
-    for robot in dict.fromkeys(key[0] for key in groups):
-        lines += [
-            f"## {robot}",
-            "",
-            "| task | from | to | seeds | satisfied on the source | still satisfied on the target | phys. inserted on the target |",
-            "|---|---|---|---|---|---|---|",
-        ]
-        for (label, task, source, target), runs in groups.items():
-            if label == robot:
-                lines.append(_transfer_row(task, source, target, runs))
-        lines.append("")
-    return "\n".join(lines)
+    columns = ["task", "from", "to", "seeds", "satisfied on the source", "still satisfied on the target", "phys. inserted on the target"]
+    return "\n".join(lines + _robot_sections(groups, columns, _transfer_row))
 
 
-def _transfer_row(task: str, source: str, target: str, runs: list[dict]) -> str:
+def _transfer_row(task: str, source: str, target: str, runs: list[dict]) -> list[str]:
     seeds = sorted({run["seed"] for run in runs})
     solved = [run for run in runs if run["source_robustness"] is not None and run["source_robustness"] > 0]
     kept = sum(run["target_robustness"] is not None and run["target_robustness"] > 0 for run in solved)
     inserted = [run["target_physically_inserted"] for run in solved if "target_physically_inserted" in run]
     shown = f"{sum(inserted)}/{len(inserted)}" if inserted else "-"
-    return f"| {task} | {source} | {target} | {_seed_list(seeds)} | {len(solved)}/{len(runs)} | {kept}/{len(solved)} | {shown} |"
+    return [task, source, target, _seed_list(seeds), f"{len(solved)}/{len(runs)}", f"{kept}/{len(solved)}", shown]
+
+
+def _robot_sections(groups: dict[tuple, list[dict]], columns: list[str], row: Callable[..., list[str]]) -> list[str]:
+    """A section per robot (the first part of each group's key, in the records' order) with a
+    table row per group: `row(*rest_of_key, runs)`."""
+    lines: list[str] = []
+    for robot in dict.fromkeys(key[0] for key in groups):
+        lines += [f"## {robot}", "", "| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+        lines += ["| " + " | ".join(row(*key[1:], runs)) + " |" for key, runs in groups.items() if key[0] == robot]
+        lines.append("")
+    return lines
 
 
 def _seed_list(seeds: list[int]) -> str:
