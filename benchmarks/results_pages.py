@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Callable
 
 from benchmarks.bench_suite import METHODS, ROOT, SEARCH_RESULTS, _recorded, _search_note, paired_firsts, shown_columns, summarise
+from benchmarks.bench_transfer import satisfied
 
 RESULTS_DIR = ROOT / "benchmarks" / "results"
 PAGES_DIR = ROOT / "docs" / "results"
@@ -194,8 +195,8 @@ def transfer_page(records_path: Path) -> str:
 
 def _transfer_row(task: str, source: str, target: str, runs: list[dict]) -> list[str]:
     seeds = sorted({run["seed"] for run in runs})
-    solved = [run for run in runs if run["source_robustness"] is not None and run["source_robustness"] > 0]
-    kept = sum(run["target_robustness"] is not None and run["target_robustness"] > 0 for run in solved)
+    solved = [run for run in runs if satisfied(run["source_robustness"])]
+    kept = sum(satisfied(run["target_robustness"]) for run in solved)
     inserted = [run["target_physically_inserted"] for run in solved if "target_physically_inserted" in run]
     shown = f"{sum(inserted)}/{len(inserted)}" if inserted else "-"
     return [task, source, target, _seed_list(seeds), f"{len(solved)}/{len(runs)}", f"{kept}/{len(solved)}", shown]
