@@ -289,6 +289,10 @@ def _run_tpe(task, seed: int) -> tuple[list[dict], float]:
     return trials, initial
 
 
+class HeldIndexError(ValueError):
+    """A `--hold` index beyond the problem's dimension (known only once its space is built)."""
+
+
 def random_search(problem: str, points: int, seed: int = 12345, held: dict[int, float] | None = None) -> dict:
     """The best of `points` uniform random points: evidence that the problem can be solved.
 
@@ -304,7 +308,7 @@ def random_search(problem: str, points: int, seed: int = 12345, held: dict[int, 
         space, objective = objective_for(task, models)
     held = held or {}
     if any(not 0 <= index < space.dimension for index in held):
-        raise ValueError(f"{problem}: --hold indices must be in 0..{space.dimension - 1}")
+        raise HeldIndexError(f"{problem}: --hold indices must be in 0..{space.dimension - 1}")
     unit = np.random.default_rng(seed).random((points, space.dimension))
     for index, value in held.items():
         unit[:, index] = value
@@ -555,7 +559,7 @@ def main(argv: list[str] | None = None) -> None:
             for _, record in local_map(_search, [(problem, args.search, held) for problem in args.problems], args.jobs):
                 _append(SEARCH_RESULTS, record)
                 Console(stderr=True).print(record)
-        except ValueError as error:
+        except HeldIndexError as error:
             parser.error(str(error))
     elif not args.table:
         run_suite(args.problems, args.methods, seeds, args.jobs, args.results)

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from benchmarks.bench_suite import main, paired_firsts, random_search, summarise
+from benchmarks.bench_suite import HeldIndexError, main, paired_firsts, random_search, summarise
 
 
 def _record(problem: str, method: str, seed: int, first: int | None) -> dict:
@@ -73,6 +73,9 @@ def test_a_held_coordinate_outside_the_unit_box_is_refused(capsys):
     assert "use it with --search N" in capsys.readouterr().err
 
 
-def test_a_held_coordinate_beyond_the_problems_dimension_is_refused():
-    with pytest.raises(ValueError, match=r"phi1_first: --hold indices must be in 0\.\.11"):
+def test_a_held_coordinate_beyond_the_problems_dimension_is_refused(capsys):
+    with pytest.raises(HeldIndexError, match=r"phi1_first: --hold indices must be in 0\.\.11"):
         random_search("phi1_first", 1, held={12: 0.5})
+    with pytest.raises(SystemExit):
+        main(["--problems", "phi1_first", "--search", "1", "--hold", "12=0.5"])
+    assert "phi1_first: --hold indices must be in 0..11" in capsys.readouterr().err
