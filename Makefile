@@ -34,8 +34,8 @@ run: $(STAMP)
 # processes would otherwise compete for the same two cores. The console examples of each page
 # (README, docs/) run in one worker (each follows the examples before it); the other tests are
 # handed out one at a time, the longest first (tests/conftest.py), so that both workers stay
-# busy to the end.
-PYTEST := OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 $(BIN)/python -m pytest -q -n 2 --dist loadgroup
+# busy to the end. The 20 longest tests are listed at the end.
+PYTEST := OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 $(BIN)/python -m pytest -q -n 2 --dist loadgroup --durations=20
 
 test: $(STAMP) lint docs browser
 	$(PYTEST)
