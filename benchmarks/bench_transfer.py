@@ -67,6 +67,16 @@ def satisfied(value: float | None) -> bool:
     return value is not None and value > 0
 
 
+def transfer_counts(runs: list[dict[str, Any]]) -> tuple[int, int, list[bool]]:
+    """Of one (task, source, target) group's runs: how many satisfied their spec on the source,
+    how many of those still satisfy it on the target, and for each of those checked physically
+    whether the shaft ended in the hole on the target (the console table's and the page's counts)."""
+    on_source = [run for run in runs if satisfied(run["source_robustness"])]
+    kept = sum(satisfied(run["target_robustness"]) for run in on_source)
+    inserted = [run["target_physically_inserted"] for run in on_source if "target_physically_inserted" in run]
+    return len(on_source), kept, inserted
+
+
 def print_totals(results: list[dict[str, Any]], title: str) -> None:
     """Per task and direction, over seeds."""
     from rich.console import Console
@@ -79,17 +89,15 @@ def print_totals(results: list[dict[str, Any]], title: str) -> None:
     for result in results:
         groups.setdefault((result["task"], result["source"], result["target"]), []).append(result)
     for (task_name, source, target), runs in groups.items():
-        on_source = [run for run in runs if satisfied(run["source_robustness"])]
-        kept = sum(satisfied(run["target_robustness"]) for run in on_source)
-        inserted = [run["target_physically_inserted"] for run in on_source if "target_physically_inserted" in run]
+        on_source, kept, inserted = transfer_counts(runs)
         minutes = sum(run["wall_seconds"] for run in runs) / 60
         table.add_row(
             task_name,
             source,
             target,
             str(len(runs)),
-            f"{len(on_source)}/{len(runs)}",
-            f"{kept}/{len(on_source)}",
+            f"{on_source}/{len(runs)}",
+            f"{kept}/{on_source}",
             f"{sum(inserted)}/{len(inserted)}" if inserted else "",
             f"{minutes:.1f} min",
         )

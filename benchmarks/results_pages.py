@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Callable
 
 from benchmarks.bench_suite import METHODS, ROOT, SEARCH_RESULTS, _recorded, _search_note, paired_firsts, shown_columns, summarise
-from benchmarks.bench_transfer import satisfied
+from benchmarks.bench_transfer import transfer_counts
 
 RESULTS_DIR = ROOT / "benchmarks" / "results"
 PAGES_DIR = ROOT / "docs" / "results"
@@ -195,11 +195,9 @@ def transfer_page(records_path: Path) -> str:
 
 def _transfer_row(task: str, source: str, target: str, runs: list[dict]) -> list[str]:
     seeds = sorted({run["seed"] for run in runs})
-    solved = [run for run in runs if satisfied(run["source_robustness"])]
-    kept = sum(satisfied(run["target_robustness"]) for run in solved)
-    inserted = [run["target_physically_inserted"] for run in solved if "target_physically_inserted" in run]
+    solved, kept, inserted = transfer_counts(runs)
     shown = f"{sum(inserted)}/{len(inserted)}" if inserted else "-"
-    return [task, source, target, _seed_list(seeds), f"{len(solved)}/{len(runs)}", f"{kept}/{len(solved)}", shown]
+    return [task, source, target, _seed_list(seeds), f"{solved}/{len(runs)}", f"{kept}/{solved}", shown]
 
 
 def _robot_sections(groups: dict[tuple, list[dict]], columns: list[str], row: Callable[..., list[str]]) -> list[str]:
