@@ -6,7 +6,6 @@ into one line on stderr and its own exit code (`exit_code`), never a traceback.
 
 from __future__ import annotations
 
-from pathlib import Path
 
 from stl_lfd.key_positions import with_position
 
@@ -48,9 +47,11 @@ class SpecError(StlLfdError):
         """A copy naming `source` and showing the offending line of `text` (default: the file)."""
         context = self.context
         if text is None and not context and self.line:
+            from stl_lfd.files import UnreadableFile, read_text  # files raises errors of this module
+
             try:
-                text = Path(source).read_text()
-            except (OSError, UnicodeDecodeError):
+                text = read_text(source, "specification file", 1_000_000)
+            except UnreadableFile:
                 text = None
         if text is not None and self.line:
             context = caret_context(text, self.line, self.column)

@@ -9,6 +9,7 @@ when complete and removed on any failure, so a crash or Ctrl-C leaves the old fi
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -59,23 +60,59 @@ class UnreadableFile(Exception):
     """Why `read_text` could not read a file; callers turn it into their own error class."""
 
 
-def read_text(path: Path | str, what: str) -> str:
-    """The text of a UTF-8 file, a byte-order mark dropped.
+MAX_TEXT_BYTES = 256_000_000  # a recorded trial is a few MB; this is a file given by mistake
+
+
+def read_text(path: Path | str, what: str, max_bytes: int = MAX_TEXT_BYTES) -> str:
+    """The text of a regular UTF-8 file of at most `max_bytes`, a byte-order mark dropped.
+
+    Only a regular file is read (a FIFO, a device such as /dev/zero or a socket is refused
+    without blocking), and never more than `max_bytes` of it, whatever its size claims.
 
     Raises:
-        UnreadableFile: "no such WHAT", "is a folder, not a WHAT", "not a text file ...".
+        UnreadableFile: "no such WHAT", "is a folder, not a WHAT", "not a regular file ...",
+            "larger than ...", "not a text file ...".
     """
     try:
-        return Path(path).read_text(encoding="utf-8-sig")
+        return decoded(read_bounded(path, what, max_bytes), what)
     except FileNotFoundError:
         problem = f"no such {what}"
     except IsADirectoryError:
         problem = f"is a folder, not a {what}"
-    except UnicodeDecodeError:
-        problem = f"not a text file (it is not UTF-8); expected a {what}"
     except OSError as error:
         problem = f"cannot read the {what} ({error.strerror or error})"
     raise UnreadableFile(problem)
+
+
+def read_bounded(path: Path | str, what: str, max_bytes: int) -> bytes:
+    """The bytes of the regular file at `path`, refused when over `max_bytes` (UnreadableFile);
+    OSError when it cannot be opened."""
+    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)  # a FIFO opens without waiting for a writer
+    with os.fdopen(descriptor, "rb") as stream:
+        status = os.fstat(descriptor)
+        if stat.S_ISDIR(status.st_mode):
+            raise IsADirectoryError(path)
+        if not stat.S_ISREG(status.st_mode):
+            raise UnreadableFile(f"not a regular file (a pipe, device or socket); expected a {what}")
+        data = stream.read(max_bytes + 1)
+    if len(data) > max_bytes:
+        raise UnreadableFile(f"the file is larger than {_size(max_bytes)}; is it the right {what}?")
+    return data
+
+
+def decoded(data: bytes, what: str) -> str:
+    """`data` as UTF-8 text without a byte-order mark; UnreadableFile for binary data."""
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise UnreadableFile(f"not a text file (it is not UTF-8); expected a {what}") from None
+    if "\0" in text:
+        raise UnreadableFile(f"not a text file (it holds NUL bytes); expected a {what}")
+    return text
+
+
+def _size(count: int) -> str:
+    return f"{count / 1e6:g} MB" if count >= 1_000_000 else f"{count / 1e3:g} kB"
 
 
 @contextmanager

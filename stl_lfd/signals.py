@@ -16,7 +16,7 @@ from typing import TextIO
 import numpy as np
 
 from stl_lfd.errors import SignalError
-from stl_lfd.files import UnreadableFile, read_text, write_atomically
+from stl_lfd.files import MAX_TEXT_BYTES, UnreadableFile, decoded, read_text, write_atomically
 
 TIME_COLUMN = "t"
 
@@ -106,12 +106,19 @@ def as_written(table: SignalTable, digits: int = 12) -> SignalTable:
 
 
 def _read_text(path: str | Path, shown: str) -> str:
-    if str(path) == "-":
-        return sys.stdin.read().removeprefix("\ufeff")
     try:
+        if str(path) == "-":
+            return decoded(_read_stdin(), "CSV file")
         return read_text(path, "CSV file")
     except UnreadableFile as error:
         raise SignalError(f"{shown}: {error}") from None
+
+
+def _read_stdin() -> bytes:
+    data = sys.stdin.buffer.read(MAX_TEXT_BYTES + 1)
+    if len(data) > MAX_TEXT_BYTES:
+        raise UnreadableFile(f"the input is larger than {MAX_TEXT_BYTES // 1_000_000} MB; is it a CSV file?")
+    return data
 
 
 def _check_header(header: list[str], required: tuple[str, ...], shown: str) -> None:

@@ -49,10 +49,8 @@ _Loader.add_implicit_resolver(
 def read_yaml(path: Path | str) -> dict[str, Any]:
     """The top-level mapping of a YAML file; ConfigError for a missing, huge or bad file."""
     path = Path(path)
-    if path.is_file() and path.stat().st_size > MAX_BYTES:
-        raise ConfigError(f"{path}: the file is larger than {MAX_BYTES // 1000} kB; is it the right file?")
     try:
-        text = read_text(path, "YAML file")
+        text = read_text(path, "YAML file", MAX_BYTES)
     except UnreadableFile as error:
         raise ConfigError(f"{path}: {error}") from None
     try:

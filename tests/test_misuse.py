@@ -287,6 +287,12 @@ CASES = [
     Case("rollout-rate-zero", ["rollout", "{model}", "--rate", "0"], 6, "the rate must be a positive"),
     Case("rollout-output-folder", ["rollout", "{model}", "-o", "{case}"], 8, "is a folder"),
     Case("rollout-output-suffix", ["rollout", "{model}", "-o", "{case}/x.txt"], 8, "must end in .csv"),
+    # --- files that are not what they claim: devices, huge, binary -----------------------------
+    Case("spec-device", ["robustness", "/dev/zero", "{csv}"], 3, "not a regular file"),
+    Case("spec-huge", ["robustness", "{case}/s.stl", "{csv}"], 3, "larger than 1 MB", {"s.stl": "phi := F x > 0\n" + "#" * 1_100_000 + "\n"}),
+    Case("spec-nul-bytes", ["robustness", "{case}/s.stl", "{csv}"], 3, "holds NUL bytes", {"s.stl": b"phi := F x\x00\x00 > 0\n"}),
+    Case("signals-device", ["robustness", "{spec}", "/dev/zero"], 4, "not a regular file"),
+    Case("task-device", ["optimize", "/dev/zero", "--out", "{case}/out"], 5, "not a regular file"),
     # --- task files -------------------------------------------------------------------------
     Case("task-missing", ["optimize", "{case}/nope.yaml", "--out", "{case}/out"], 5, "no such YAML file"),
     Case("task-folder", ["optimize", "{case}", "--out", "{case}/out"], 5, "is a folder"),
@@ -303,7 +309,7 @@ CASES = [
             + "".join(f"{chr(98 + i)}: &{chr(98 + i)} [" + ",".join([f"*{chr(97 + i)}"] * 10) + "]\n" for i in range(6))
         },
     ),
-    Case("task-huge-file", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "larger than 1000 kB", {"t.yaml": "# " + "x" * 1_100_000 + "\n"}),
+    Case("task-huge-file", ["optimize", "{case}/t.yaml", "--out", "{case}/out"], 5, "larger than 1 MB", {"t.yaml": "# " + "x" * 1_100_000 + "\n"}),
     task_case("task-unknown-key", "unknown key 'iterations'", iterations="5"),
     task_case("task-no-spec", "missing key 'spec'", spec=None),
     task_case("task-spec-missing-file", "'spec' names nope.stl, which does not exist", spec="nope.stl"),

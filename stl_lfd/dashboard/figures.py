@@ -11,11 +11,13 @@ from typing import Any
 
 import numpy as np
 
-from stl_lfd.dashboard.folder import RunView
+from stl_lfd.dashboard.folder import RunView, inside
 from stl_lfd.signals import SignalTable, read_signal_csv
 
 Figure = dict[str, Any]
 MAX_POINTS = 600  # samples of a drawn signal: enough for the eye, cheap to send
+MAX_TRIAL_POINTS = 2000  # points of a series over trials: a run of 200,000 trials is thinned to this
+MAX_PARTS = 50  # parts of the spec drawn
 TIME_SIGNALS = ("force", "tilt", "shaft_tilt", "shaft_depth", "shaft_offset")  # drawn over time when recorded or constrained
 LATEST, BEST = "#1f77b4", "#d62728"
 
@@ -24,17 +26,50 @@ def _layout(title: str, **more: Any) -> dict[str, Any]:
     return {"title": {"text": title, "font": {"size": 14}}, "margin": {"l": 50, "r": 10, "t": 36, "b": 40}, "uirevision": "keep", **more}
 
 
+def label(name: str) -> str:
+    """A name from a run's files as Plotly shows it as text (its `<`, `>` and `&` as entities:
+    Plotly reads a few HTML tags in names)."""
+    return str(name).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")[:200]
+
+
+def thinned_trials(numbers: np.ndarray, values: np.ndarray, most: int = MAX_TRIAL_POINTS) -> tuple[list, list]:
+    """At most about `most` points of a per-trial series for a screen: all of them when there
+    are few, else the lowest and the highest value of each of `most / 2` runs of consecutive
+    trials (in trial order), so that no outlier is lost. Missing values (NaN) are dropped."""
+    keep = np.isfinite(values)
+    numbers, values = numbers[keep], values[keep]
+    if len(values) > most:
+        edges = np.linspace(0, len(values), most // 2 + 1).astype(int)
+        lowest = np.minimum.reduceat(values, edges[:-1])
+        highest = np.maximum.reduceat(values, edges[:-1])
+        picked = set()
+        for start, stop, low, high in zip(edges[:-1], edges[1:], lowest, highest):
+            part = values[start:stop]
+            picked.update((start + int(np.argmax(part == low)), start + int(np.argmax(part == high))))
+        index = np.array(sorted(picked))
+        numbers, values = numbers[index], values[index]
+    return numbers.tolist(), np.round(values, 6).tolist()
+
+
+def best_so_far(numbers: np.ndarray, values: np.ndarray) -> tuple[list, list]:
+    """The best robustness so far as a step line: its points where it improves, and the last."""
+    finite = np.where(np.isfinite(values), values, -np.inf)
+    running = np.maximum.accumulate(finite) if len(finite) else finite
+    changes = np.flatnonzero(np.r_[True, running[1:] != running[:-1]]) if len(running) else np.empty(0, int)
+    changes = np.unique(np.r_[changes, len(running) - 1]) if len(running) else changes
+    changes = changes[np.isfinite(running[changes])]
+    return numbers[changes].tolist(), np.round(running[changes], 6).tolist()
+
+
 def robustness_figure(view: RunView) -> Figure:
-    """Each trial's robustness, the best so far, zero and the unoptimised skill's."""
-    numbers = [trial["trial"] for trial in view.trials]
-    values = [trial.get("robustness") for trial in view.trials]
-    best, best_so_far = None, []
-    for value in values:
-        best = value if value is not None and (best is None or value > best) else best
-        best_so_far.append(best)
+    """Each trial's robustness (thinned for the screen), the best so far, zero and the
+    unoptimised skill's."""
+    numbers, values = np.asarray(view.trials.numbers), np.asarray(view.trials.robustness)
+    best_x, best_y = best_so_far(numbers, values)
+    trial_x, trial_y = thinned_trials(numbers, values)
     data = [
-        {"type": "scatter", "mode": "markers", "name": "trial", "x": numbers, "y": values, "marker": {"color": LATEST}},
-        {"type": "scatter", "mode": "lines", "name": "best so far", "x": numbers, "y": best_so_far, "line": {"color": BEST, "shape": "hv"}},
+        {"type": "scatter", "mode": "markers", "name": "trial", "x": trial_x, "y": trial_y, "marker": {"color": LATEST}},
+        {"type": "scatter", "mode": "lines", "name": "best so far", "x": best_x, "y": best_y, "line": {"color": BEST, "shape": "hv"}},
     ]
     shapes = [{"type": "line", "xref": "paper", "x0": 0, "x1": 1, "y0": 0, "y1": 0, "line": {"color": "black", "width": 1}}]
     initial = view.summary.get("initial_robustness")
@@ -44,23 +79,20 @@ def robustness_figure(view: RunView) -> Figure:
 
 
 def parts_figure(view: RunView) -> Figure:
-    """The robustness of each top-level part of the spec, trial by trial."""
-    names: list[str] = []
-    for trial in view.trials:
-        names.extend(name for name in trial.get("components") or {} if name not in names)
-    numbers = [trial["trial"] for trial in view.trials]
-    data = [
-        {"type": "scatter", "mode": "lines+markers", "name": name, "x": numbers, "y": [(trial.get("components") or {}).get(name) for trial in view.trials]}
-        for name in names
-    ]
+    """The robustness of each top-level part of the spec, trial by trial (thinned)."""
+    numbers = np.asarray(view.trials.numbers)
+    data = []
+    for name, column in list(view.trials.components.items())[:MAX_PARTS]:
+        x, y = thinned_trials(numbers, np.asarray(column))
+        data.append({"type": "scatter", "mode": "lines+markers", "name": label(name), "x": x, "y": y})
     return {"data": data, "layout": _layout("the spec's parts", xaxis={"title": {"text": "trial"}})}
 
 
 def drawn_trials(view: RunView) -> dict[str, int]:
     """The trials whose executions are drawn: `latest` and `best` (0: the unoptimised skill)."""
     best = view.best()
-    latest = view.trials[-1]["trial"] if view.trials else 0
-    return {"latest": latest, "best": best["trial"] if best is not None else 0}
+    latest = view.trials.numbers[-1] if len(view.trials) else 0
+    return {"latest": latest, "best": best[0] if best is not None else 0}
 
 
 @lru_cache(maxsize=256)
@@ -72,7 +104,10 @@ def _signals(path: Path, stamp: float) -> SignalTable | None:
 
 
 def signals_of(view: RunView, trial: int) -> SignalTable | None:
+    """The recorded signals of a trial of the run, when they are a file inside the run."""
     path = view.signals_path(trial)
+    if not inside(path, view.path.resolve()):
+        return None
     try:
         return _signals(path, path.stat().st_mtime)
     except OSError:
@@ -94,16 +129,16 @@ def paths_figure(view: RunView, regions: dict[str, dict[str, tuple[float, float]
     """Seen from above: the hand's path in the latest and the best trial, a moved object's path
     (dashed), the spec's regions and the outlines of the scene's objects."""
     data = []
-    for label, trial in drawn_trials(view).items():
+    for which, trial in drawn_trials(view).items():
         table = signals_of(view, trial)
         if table is None or "x" not in table.columns or "y" not in table.columns:
             continue
-        color = LATEST if label == "latest" else BEST
+        color = LATEST if which == "latest" else BEST
         data.append(
             {
                 "type": "scatter",
                 "mode": "lines",
-                "name": f"{label} (trial {trial})",
+                "name": f"{which} (trial {trial})",
                 "x": _thinned(table.columns["x"]),
                 "y": _thinned(table.columns["y"]),
                 "line": {"color": color},
@@ -111,7 +146,7 @@ def paths_figure(view: RunView, regions: dict[str, dict[str, tuple[float, float]
         )
         for name in moved_objects(table):
             data.append(
-                {"type": "scatter", "mode": "lines", "name": f"{name}, {label}", "x": _thinned(table.columns[f"{name}_x"]),
+                {"type": "scatter", "mode": "lines", "name": label(f"{name}, {which}"), "x": _thinned(table.columns[f"{name}_x"]),
                  "y": _thinned(table.columns[f"{name}_y"]), "line": {"color": color, "dash": "dash"}}
             )  # fmt: skip
     shapes = [
@@ -169,15 +204,15 @@ def signals_figure(view: RunView, thresholds: dict[str, list[Any]]) -> Figure:
     for index, name in enumerate(names):
         axis = "" if index == 0 else str(index + 1)
         low, high = 1 - (index + 1) / len(names), 1 - index / len(names)
-        layout[f"yaxis{axis}"] = {"title": {"text": name}, "domain": [low + 0.04, high - 0.04], "anchor": f"x{axis}"}
+        layout[f"yaxis{axis}"] = {"title": {"text": label(name)}, "domain": [low + 0.04, high - 0.04], "anchor": f"x{axis}"}
         layout[f"xaxis{axis}"] = {"anchor": f"y{axis}", "matches": "x" if index else None, "showticklabels": index == len(names) - 1}
-        for label, trial in drawn_trials(view).items():
+        for which, trial in drawn_trials(view).items():
             table = signals_of(view, trial)
             if table is None or name not in table.columns:
                 continue
-            color = LATEST if label == "latest" else BEST
+            color = LATEST if which == "latest" else BEST
             data.append(
-                {"type": "scatter", "mode": "lines", "name": f"{label} (trial {trial})", "legendgroup": label, "showlegend": index == 0,
+                {"type": "scatter", "mode": "lines", "name": f"{which} (trial {trial})", "legendgroup": which, "showlegend": index == 0,
                  "x": _thinned(table.times), "y": _thinned(table.columns[name]), "xaxis": f"x{axis}", "yaxis": f"y{axis}", "line": {"color": color}}
             )  # fmt: skip
         for threshold in thresholds.get(name, []):

@@ -10,14 +10,19 @@ half-written line, a file that is not JSON, a run directory that is not one) bec
 from __future__ import annotations
 
 import json
+import math
 import os
+import stat
 import time
+from array import array
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
+import numpy as np
 import yaml
 
+from stl_lfd.files import UnreadableFile, read_text
 from stl_lfd.optim.runs.directory import PENDING_FILE, SUMMARY_FILE, TASK_FILE, TRIALS_FILE, RunDirectory
 from stl_lfd.optim.runs.lock import LOCK_FILE
 
@@ -25,6 +30,9 @@ SWEEP_FILE = "sweep.yaml"
 SWEEP_RUNS = "runs"
 WATCHED = (TASK_FILE, TRIALS_FILE, SUMMARY_FILE, PENDING_FILE, LOCK_FILE)  # a change to any is an update
 MAX_DEPTH = 3  # how deep under the folder runs and sweeps are looked for
+MAX_FILE_BYTES = 10_000_000  # task.yaml, summary.json, pending.json: a few kB each
+MAX_LINE_BYTES = 1_000_000  # a trial's line in trials.jsonl: a few kB
+CHUNK_BYTES = 4_000_000  # trials.jsonl is read this much at a time, never whole
 
 
 @dataclass(frozen=True)
@@ -36,14 +44,16 @@ class Listing:
 
 
 def find(folder: Path, depth: int = MAX_DEPTH) -> Listing:
-    """The runs and sweeps under `folder` (itself included), sorted by path."""
+    """The runs and sweeps under `folder` (itself included), sorted by path; a link that leads
+    out of `folder` is not followed."""
+    root = Path(folder).resolve()
     runs: list[Path] = []
     sweeps: list[Path] = []
 
     def visit(path: Path, level: int) -> None:
         if (path / SWEEP_FILE).is_file():
             sweeps.append(path)
-        elif (path / TASK_FILE).is_file():
+        elif os.path.lexists(path / TASK_FILE):  # a run, damaged or not
             runs.append(path)
         elif level < depth:
             try:
@@ -51,10 +61,19 @@ def find(folder: Path, depth: int = MAX_DEPTH) -> Listing:
             except OSError:
                 return
             for child in children:
-                visit(Path(child), level + 1)
+                if inside(Path(child), root):
+                    visit(Path(child), level + 1)
 
     visit(Path(folder), 0)
     return Listing(tuple(sorted(runs)), tuple(sorted(sweeps)))
+
+
+def inside(path: Path, root: Path) -> bool:
+    """Whether `path`, once resolved (`..` and links), lies in the resolved folder `root`."""
+    try:
+        return path.resolve().is_relative_to(root)
+    except (OSError, RuntimeError):  # a loop of links
+        return False
 
 
 def sweep_runs(sweep: Path) -> list[Path]:
@@ -62,12 +81,48 @@ def sweep_runs(sweep: Path) -> list[Path]:
     return find(sweep / SWEEP_RUNS, depth=1).runs
 
 
+class TrialTable:
+    """What the dashboard draws of a run's trials, kept compact (a run may have hundreds of
+    thousands): the trial numbers, the robustness (NaN where a trial failed), the robustness of
+    each part of the spec (NaN where a trial did not record it), and the last record whole."""
+
+    def __init__(self) -> None:
+        self.numbers = array("q")
+        self.robustness = array("d")
+        self.components: dict[str, array] = {}
+        self.last: dict[str, Any] = {}
+
+    def __len__(self) -> int:
+        return len(self.numbers)
+
+    def append(self, record: dict[str, Any]) -> None:
+        count = len(self.numbers)
+        self.numbers.append(record["trial"])
+        robustness = record.get("robustness")
+        self.robustness.append(math.nan if robustness is None else float(robustness))
+        for name, value in (record.get("components") or {}).items():
+            column = self.components.setdefault(name, array("d", [math.nan]) * count)
+            column.append(float(value) if type(value) in (int, float) else math.nan)
+        for column in self.components.values():
+            if len(column) == count:
+                column.append(math.nan)
+        self.last = record
+
+    def best(self) -> tuple[int, float] | None:
+        """The best trial's number and robustness (the first of equals), None before one scored."""
+        values = np.frombuffer(self.robustness, dtype=float) if self.robustness else np.empty(0)
+        if not np.isfinite(values).any():
+            return None
+        index = int(np.nanargmax(np.where(np.isfinite(values), values, np.nan)))
+        return self.numbers[index], float(values[index])
+
+
 @dataclass
 class RunView:
     """A run directory as the dashboard last read it.
 
     Attributes:
-        trials: the records of `trials.jsonl` read so far (dictionaries, as written).
+        trials: the trials of `trials.jsonl` read so far.
         summary: `summary.json`, or {} before it exists.
         task: `task.yaml`, or {}.
         pending: the entries of `pending.json` (trials handed out and not recorded).
@@ -76,7 +131,7 @@ class RunView:
     """
 
     path: Path
-    trials: list[dict[str, Any]] = field(default_factory=list)
+    trials: TrialTable = field(default_factory=TrialTable)
     summary: dict[str, Any] = field(default_factory=dict)
     task: dict[str, Any] = field(default_factory=dict)
     pending: list[dict[str, Any]] = field(default_factory=list)
@@ -87,17 +142,20 @@ class RunView:
     _stamp: tuple = ()
 
     def refresh(self) -> bool:
-        """Read what changed since the last refresh; whether anything did."""
+        """Read what changed since the last refresh; whether anything did. Whatever is wrong
+        with the files becomes `problem`: a damaged run never raises here."""
         stamp = tuple(_stat(self.path / name) for name in WATCHED)
         if stamp == self._stamp and self.version > 0:
             return False
         if self._stamp and self._moved_in(stamp):
-            self.task, self.trials, self._offset = {}, [], 0
+            self.task, self.trials, self._offset = {}, TrialTable(), 0
         self._stamp = stamp
         self.problem = ""
         try:
             self._read()
-        except (OSError, ValueError, yaml.YAMLError) as error:
+        except RecursionError:
+            self.problem = "a file nests too deeply to read"
+        except Exception as error:  # a damaged file of any kind: the page says what it can
             self.problem = str(error) or type(error).__name__
         self.version += 1
         return True
@@ -110,7 +168,7 @@ class RunView:
 
     def _read(self) -> None:
         if not self.task:
-            self.task = _mapping(yaml.safe_load((self.path / TASK_FILE).read_text()), TASK_FILE)
+            self.task = _mapping(yaml.safe_load(_text(self.path / TASK_FILE)), TASK_FILE)
             self.task_version += 1
         self.summary = _json_file(self.path / SUMMARY_FILE, {})
         pending = _json_file(self.path / PENDING_FILE, {"pending": []})
@@ -123,17 +181,31 @@ class RunView:
         self._read_new_trials()
 
     def _read_new_trials(self) -> None:
-        path = self.path / TRIALS_FILE
-        if not path.is_file():
-            return
-        with open(path, "rb") as stream:
+        """Append the complete lines written since the last read, a chunk at a time (a line
+        still being written waits for the next refresh)."""
+        try:
+            stream = open_regular(self.path / TRIALS_FILE)
+        except FileNotFoundError:
+            raise ValueError(f"{TRIALS_FILE}: missing") from None
+        with stream:
             stream.seek(self._offset)
-            data = stream.read()
-        complete = data[: data.rfind(b"\n") + 1]  # a line still being written waits for the next refresh
-        for number, line in enumerate(complete.splitlines(), start=len(self.trials) + 1):
+            rest = b""
+            while chunk := stream.read(CHUNK_BYTES):
+                complete = rest + chunk
+                cut = complete.rfind(b"\n") + 1
+                rest = complete[cut:]
+                if len(rest) > MAX_LINE_BYTES:
+                    raise ValueError(f"{TRIALS_FILE} line {len(self.trials) + 1}: longer than {MAX_LINE_BYTES // 1_000_000} MB, not a trial record")
+                self._append_lines(complete[:cut])
+
+    def _append_lines(self, data: bytes) -> None:
+        for line in data.splitlines():
+            number = len(self.trials) + 1
+            if len(line) > MAX_LINE_BYTES:
+                raise ValueError(f"{TRIALS_FILE} line {number}: longer than {MAX_LINE_BYTES // 1_000_000} MB, not a trial record")
             try:
                 record = json.loads(line)
-            except json.JSONDecodeError:
+            except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
                 record = None
             if not _is_trial_record(record):
                 raise ValueError(f"{TRIALS_FILE} line {number}: not a trial record")
@@ -155,9 +227,9 @@ class RunView:
         budget = self.summary.get("budget") or (optimizer.get("trials") if isinstance(optimizer, dict) else None)
         return int(budget) if isinstance(budget, (int, float)) else None
 
-    def best(self) -> dict[str, Any] | None:
-        scored = [trial for trial in self.trials if isinstance(trial.get("robustness"), (int, float))]
-        return max(scored, key=lambda trial: trial["robustness"]) if scored else None
+    def best(self) -> tuple[int, float] | None:
+        """The best trial's number and robustness, None before a trial scored."""
+        return self.trials.best()
 
     def writer(self) -> int | None:
         """The PID of the stlopt process writing the run, if one is: the holder of the lock on
@@ -181,7 +253,7 @@ class RunView:
         if self.summary.get("complete"):
             return "finished"
         stopped = f"stopped after {len(self.trials)} of {self.budget} trials" if self.budget else "stopped"
-        last = self.trials[-1] if self.trials else {}
+        last = self.trials.last
         return stopped + (f"; trial {last['trial']} failed: {last.get('error') or 'no reason recorded'}" if last.get("status") == "failed" else "")
 
     def signals_path(self, trial: int) -> Path:
@@ -230,11 +302,31 @@ def _stat(path: Path) -> tuple[int, int, int]:
     return (status.st_size, status.st_mtime_ns, status.st_ino)
 
 
+def open_regular(path: Path) -> BinaryIO:
+    """`path` opened for reading when it is a regular file; ValueError naming the file when it
+    is anything else (a folder, a FIFO whose read would block, a device), FileNotFoundError
+    when it is not there."""
+    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    stream = os.fdopen(descriptor, "rb")
+    if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+        stream.close()
+        raise ValueError(f"{path.name}: not a regular file")
+    return stream
+
+
+def _text(path: Path) -> str:
+    """The text of one of a run's small files, at most `MAX_FILE_BYTES`."""
+    try:
+        return read_text(path, path.name, MAX_FILE_BYTES)
+    except UnreadableFile as error:
+        raise ValueError(f"{path.name}: {error}") from None
+
+
 def _json_file(path: Path, missing: dict[str, Any]) -> dict[str, Any]:
-    if not path.is_file():
+    if not os.path.lexists(path):
         return missing
     try:
-        return _mapping(json.loads(path.read_text()), path.name)
+        return _mapping(json.loads(_text(path)), path.name)
     except json.JSONDecodeError as error:
         raise ValueError(f"{path.name} line {error.lineno}: not JSON ({error.msg})") from None
 

@@ -30,6 +30,7 @@ from stl_lfd.stl.transformer import MAX_DEPTH, ToAst
 _TOO_DEEP = f"the specification nests more than {MAX_DEPTH} levels deep (counting through its definitions); simplify it"
 
 _SHOWN_COLUMNS = 120  # of a source line shown under an error
+MAX_SPEC_BYTES = 1_000_000  # a generated specification may be large; a megabyte is a wrong file
 
 _READABLE_TERMINALS = {
     "NAME": "a name",
@@ -114,7 +115,7 @@ def nesting_depth(spec: ast.Spec) -> int:
 
 def _read(path: Path, shown: str) -> str:
     try:
-        return read_text(path, "specification file")
+        return read_text(path, "specification file", MAX_SPEC_BYTES)
     except UnreadableFile as error:
         raise SpecError(str(error), shown) from None
 
@@ -225,12 +226,16 @@ def _syntax_error(error: UnexpectedInput, text: str, source: str) -> StlSyntaxEr
 def _placed(error: SpecError, source: str, text: str | None) -> SpecError:
     """`error` naming `source` and showing the offending line of `text` (default: the file)."""
     if text is None and not error.context and error.line:
-        try:
-            text = Path(source).read_text()
-        except (OSError, UnicodeDecodeError):
-            text = None
+        text = _text_or_none(source)
     context = _context(text, error.line, error.column) if text is not None else error.context
     return type(error)(error.message, source, error.line, error.column, context)
+
+
+def _text_or_none(source: str) -> str | None:
+    try:
+        return read_text(source, "specification file", MAX_SPEC_BYTES)
+    except UnreadableFile:
+        return None
 
 
 def _context(text: str, line: int, column: int) -> str:

@@ -22,12 +22,13 @@ def test_a_run_is_read_once_and_then_only_its_new_lines(runs_folder, tmp_path):
     lines = (run / "trials.jsonl").read_text().splitlines(keepends=True)
     (run / "trials.jsonl").write_text("".join(lines[:2]) + lines[2][:10])  # the third line half-written
     view = RunView(run)
-    assert view.refresh() and [trial["trial"] for trial in view.trials] == [1, 2]
+    assert view.refresh() and list(view.trials.numbers) == [1, 2]
     assert not view.refresh()  # nothing changed: nothing read
     (run / "trials.jsonl").write_text("".join(lines))
-    assert view.refresh() and [trial["trial"] for trial in view.trials] == list(range(1, len(lines) + 1))
+    assert view.refresh() and list(view.trials.numbers) == list(range(1, len(lines) + 1))
     assert view.state() == "finished" and view.problem == ""
-    assert view.best()["robustness"] == max(json.loads(line)["robustness"] for line in lines)
+    best = max((json.loads(line) for line in lines), key=lambda record: record["robustness"])
+    assert view.best() == (best["trial"], best["robustness"])
 
 
 def test_damaged_and_half_written_runs_say_what_is_wrong(runs_folder, tmp_path):
