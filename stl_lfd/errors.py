@@ -6,7 +6,6 @@ into one line on stderr and its own exit code (`exit_code`), never a traceback.
 
 from __future__ import annotations
 
-
 from stl_lfd.key_positions import with_position
 
 
