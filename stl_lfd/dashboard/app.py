@@ -8,6 +8,8 @@ works offline; the server only reads the run directories.
 
 from __future__ import annotations
 
+import ipaddress
+import sys
 import threading
 from pathlib import Path
 from typing import Any
@@ -49,20 +51,48 @@ def create_app(folder: Path) -> Any:
 
 
 def check_listenable(host: str, port: int) -> None:
-    """Refuse, with one line, an address that cannot be listened on (werkzeug would print its
-    own lines and exit)."""
+    """Refuse, with one line, a port out of range or an address that cannot be listened on
+    (werkzeug would print its own lines and exit)."""
     import socket
 
+    if not 0 <= port <= 65535:
+        raise ConfigError(f"{spelled('port')} {port}: not a port (0 to 65535; 0 picks a free one)")
     try:
         with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as probe:
             probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             probe.bind((host, port))
-    except OSError as error:
-        raise ConfigError(f"{spelled('host')} {host} {spelled('port')} {port}: cannot listen there ({error.strerror or error})") from None
+    except (OSError, OverflowError, UnicodeError) as error:
+        raise ConfigError(f"{spelled('host')} {host} {spelled('port')} {port}: cannot listen there ({getattr(error, 'strerror', None) or error})") from None
+
+
+def is_loopback(host: str) -> bool:
+    """Whether `host` is only reachable from this machine (127.0.0.0/8, ::1, localhost)."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def url(host: str, port: int) -> str:
+    """The address to open: IPv6 addresses in brackets (`http://[::1]:8050/`)."""
+    return f"http://[{host}]:{port}/" if ":" in host else f"http://{host}:{port}/"
+
+
+def exposure(folder: Path, host: str, port: int) -> str | None:
+    """The warning for an address other machines can reach, None for a loopback one."""
+    if is_loopback(host):
+        return None
+    return (
+        f"warning: listening on {host}: anyone who can reach this machine on port {port} can read the runs under {folder} "
+        f"(no password; {spelled('host')} 127.0.0.1 keeps them on this machine)"
+    )
 
 
 def serve(folder: Path, host: str = "127.0.0.1", port: int = 8050, ready: Any = None) -> None:
-    """Serve the dashboard until interrupted (`ready(url)` once it listens)."""
+    """Serve the dashboard until interrupted (`ready(url)` once it listens; a warning first when
+    other machines can reach it); KeyboardInterrupt when interrupted."""
     import logging
 
     from werkzeug.serving import make_server
@@ -72,6 +102,10 @@ def serve(folder: Path, host: str = "127.0.0.1", port: int = 8050, ready: Any = 
     warm_up()
     logging.getLogger("werkzeug").setLevel(logging.ERROR)  # no line per request on the terminal
     server = make_server(host, port, app.server, threaded=True)
+    warning = exposure(folder, host, server.server_port)
+    if warning is not None:
+        print(warning, file=sys.stderr, flush=True)
     if ready is not None:
-        ready(f"http://{host}:{server.server_port}/")
-    server.serve_forever()
+        ready(url(host, server.server_port))
+    server.serve_forever()  # werkzeug's returns on Ctrl-C instead of raising
+    raise KeyboardInterrupt

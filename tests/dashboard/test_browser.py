@@ -4,12 +4,14 @@ into a sweep; a damaged run shown as such; no console errors.
 
 With STLOPT_SCREENSHOTS=FOLDER, the screenshots of docs/dashboard.md are written there."""
 
+import json
 import os
 import re
 import shutil
 import subprocess
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -32,15 +34,24 @@ STLOPT = str(Path(sys.executable).parent / "stlopt")
 UPDATE_SECONDS = 2.0
 
 
-@pytest.fixture
-def dashboard_url(runs_folder):
-    process = subprocess.Popen([STLOPT, "dashboard", str(runs_folder), "--port", "0"], stderr=subprocess.PIPE, text=True)
+@contextmanager
+def dashboard_on(folder: Path):
+    """`stlopt dashboard FOLDER` in its own process, yielding its address."""
+    process = subprocess.Popen([STLOPT, "dashboard", str(folder), "--port", "0"], stderr=subprocess.PIPE, text=True)
     line = process.stderr.readline()
     match = re.search(r"http://\S+/", line)
     assert match, line + process.stderr.read()
-    yield match.group(0)
-    process.terminate()
-    process.wait(timeout=30)
+    try:
+        yield match.group(0)
+    finally:
+        process.terminate()
+        process.wait(timeout=30)
+
+
+@pytest.fixture
+def dashboard_url(runs_folder):
+    with dashboard_on(runs_folder) as url:
+        yield url
 
 
 @pytest.fixture
@@ -122,3 +133,17 @@ def test_the_index_a_sweep_and_a_damaged_run(runs_folder, dashboard_url, page, t
     page.wait_for_function("() => document.querySelector('#run-state') && document.querySelector('#run-state').innerText.startsWith('damaged')")
     assert page.errors == []
     assert page.requests and [url for url in page.requests if not url.startswith(dashboard_url)] == []  # nothing from elsewhere: works offline
+
+
+def test_a_component_written_into_a_run_file_is_shown_as_text_and_never_runs(runs_folder, page, tmp_path):
+    run = tmp_path / "runs" / "asked"
+    shutil.copytree(runs_folder / "finished", run)
+    frame = {"props": {"srcDoc": "<script>parent.document.title = 'script ran'</script>"}, "type": "Iframe", "namespace": "dash_html_components"}
+    (run / "pending.json").write_text(json.dumps({"pending": [{"trial": 6, "phase": "stl", "robot": frame, "asked": 0.0}]}))
+    with dashboard_on(tmp_path / "runs") as url:
+        page.goto(url + "run/asked")
+        page.wait_for_selector("#pending")
+        time.sleep(1.0)  # a script would have run by now
+        assert page.locator("iframe").count() == 0 and page.title() != "script ran"
+        assert "Iframe" in page.inner_text("#pending") and "srcDoc" in page.inner_text("#pending")
+    assert page.errors == []
