@@ -46,6 +46,7 @@ class Row:
     seconds: float
     target: float | None = None
     note: str = ""
+    unit: str = "s"  # "MB" for a row that measures memory: `seconds` then holds megabytes
 
     @property
     def verdict(self) -> str:
@@ -67,6 +68,7 @@ def print_table(title: str, rows: list[Row]) -> None:
     for column in ("case", "size", "time", "target", "", "note"):
         table.add_column(column, justify="right" if column in ("time", "target") else "left")
     for row in rows:
-        target = f"< {format_seconds(row.target)}" if row.target is not None else ""
-        table.add_row(row.case, row.size, format_seconds(row.seconds), target, row.verdict, row.note)
+        shown = format_seconds if row.unit == "s" else lambda value: f"{value:.0f} {row.unit}"
+        target = f"< {shown(row.target)}" if row.target is not None else ""
+        table.add_row(row.case, row.size, shown(row.seconds), target, row.verdict, row.note)
     Console(width=130).print(table)

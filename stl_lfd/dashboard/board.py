@@ -18,7 +18,7 @@ from stl_lfd.dashboard.folder import SWEEP_FILE, RunView, inside
 from stl_lfd.optim.runs.directory import TASK_FILE
 
 REFRESH_SECONDS = 0.5
-MAX_SHOWN = 64  # runs kept read; a folder with more reads the others again when shown
+MAX_SHOWN = 1000  # runs kept read (a few kB each, and their trials); beyond, the least recently shown are read again when shown
 MAX_ADDRESS = 4096  # characters of a page's address
 RUN_PREFIX, SWEEP_PREFIX = "/run/", "/sweep/"
 

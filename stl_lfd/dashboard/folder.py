@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 import numpy as np
+import orjson
 import yaml
 
 from stl_lfd.files import UnreadableFile, read_text
@@ -101,7 +102,9 @@ class TrialTable:
         robustness = record.get("robustness")
         self.robustness.append(math.nan if robustness is None else float(robustness))
         for name, value in (record.get("components") or {}).items():
-            column = self.components.setdefault(name, array("d", [math.nan]) * count)
+            if name not in self.components:
+                self.components[name] = array("d", [math.nan]) * count
+            column = self.components[name]
             column.append(float(value) if type(value) in (int, float) else math.nan)
         for column in self.components.values():
             if len(column) == count:
@@ -203,10 +206,7 @@ class RunView:
             number = len(self.trials) + 1
             if len(line) > MAX_LINE_BYTES:
                 raise ValueError(f"{TRIALS_FILE} line {number}: longer than {MAX_LINE_BYTES // 1_000_000} MB, not a trial record")
-            try:
-                record = json.loads(line)
-            except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
-                record = None
+            record = _decoded(line)
             if not _is_trial_record(record):
                 raise ValueError(f"{TRIALS_FILE} line {number}: not a trial record")
             self.trials.append(record)
@@ -284,6 +284,19 @@ def held_locks(max_age: float = 0.2) -> dict[tuple[int, int, int], int]:
                 held[(int(major, 16), int(minor, 16), int(inode))] = int(fields[4])
         _locks = (time.monotonic(), held)
     return _locks[1]
+
+
+def _decoded(line: bytes) -> Any:
+    """A line of JSON, None when it is not: orjson first (3x faster), the standard library for
+    what only it reads (the NaN and Infinity that Python writes for such floats)."""
+    try:
+        return orjson.loads(line)
+    except orjson.JSONDecodeError:
+        pass
+    try:
+        return json.loads(line)
+    except (ValueError, RecursionError):
+        return None
 
 
 def _is_trial_record(record: Any) -> bool:
