@@ -41,7 +41,7 @@ from stl_lfd.sim.plausibility import check_recorded
 from stl_lfd.sim.reference import Reference, Rollout, write_reference_csv
 from stl_lfd.sim.safety import check_reference
 from stl_lfd.sim.scene import Scene
-from stl_lfd.sim.watchdog import Watchdog, forget_group, group_running, record_group, stop_group, stop_leftover
+from stl_lfd.sim.watchdog import Watchdog, adopt_orphans, forget_group, group_running, reap_group, record_group, stop_group, stop_leftover
 
 STOP_GRACE = 3.0  # seconds between SIGTERM and SIGKILL when a command is stopped
 EXECUTIONS_DIR = "executions"
@@ -130,7 +130,8 @@ def gate(reference: Reference, scene: Scene) -> None:
 
 def run_command(command: Command, values: dict[str, str], folder: Path, kept: bool = True) -> None:
     """Run `command` with `values` for its placeholders (and in its environment), its output in
-    `folder/stdout.txt` and `folder/stderr.txt`; stop its process group on timeout or Ctrl-C.
+    `folder/stdout.txt` and `folder/stderr.txt`; its process group is stopped (and reaped) before
+    this returns, whether it exited, timed out or was interrupted by Ctrl-C.
     Errors name `folder/stderr.txt` only when the folder is `kept` (not a temporary one).
 
     Raises:
@@ -138,6 +139,7 @@ def run_command(command: Command, values: dict[str, str], folder: Path, kept: bo
     """
     environment = dict(os.environ, **{f"STLOPT_{name.upper()}": value for name, value in values.items()})
     stop_leftover(folder, STOP_GRACE)  # a killed run's executor of this very trial: never two at once
+    adopt_orphans()
     with open(folder / "stdout.txt", "wb") as stdout, open(folder / "stderr.txt", "wb") as stderr:
         try:
             process = subprocess.Popen(
@@ -176,6 +178,7 @@ def stop_process_group(process: subprocess.Popen) -> None:
     is left once they have all ended or after `STOP_GRACE` seconds."""
     stop_group(process.pid, STOP_GRACE, lambda: process.poll() is None or group_running(process.pid))
     process.wait()
+    reap_group(process.pid, STOP_GRACE)
 
 
 def tracking_error(signals: SignalTable, reference: Reference) -> np.ndarray:

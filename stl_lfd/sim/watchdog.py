@@ -9,6 +9,9 @@ the pipe close without the supervisor's `done` stops the executor's process grou
 then SIGKILL after the grace period). The executor's group is also recorded in the exchange
 folder (`executor.json`) until the execution is over, so that a resumed run stops any executor
 of the same trial still running before it starts another (never two at once for one trial).
+
+An execution is over only once the executor's whole process group is gone: what it started and
+left running is stopped with it, and (this process being their subreaper) reaped here.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from pathlib import Path
 from typing import Callable
 
 GROUP_FILE = "executor.json"
+PR_SET_CHILD_SUBREAPER = 36  # prctl's option, from <linux/prctl.h>
 DONE = b"done"
 # What the watchdog runs (standard library only, so that it starts in a few tens of ms).
 WATCHDOG = """
@@ -62,6 +66,31 @@ class Watchdog:
         except OSError:  # it died already
             pass
         self.process.wait()
+
+
+def adopt_orphans() -> None:
+    """Make this process the reaper of its descendants' orphans (Linux's child subreaper): what
+    an executor leaves running when it exits is then this process's child, so that once its
+    group is stopped `reap_group` collects it, instead of it staying a zombie until init does."""
+    if sys.platform == "linux":
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0)
+
+
+def reap_group(group: int, grace: float) -> None:
+    """Collect the ended members of process group `group` that are this process's children,
+    waiting at most `grace` seconds for the last of them."""
+    deadline = time.monotonic() + grace
+    while True:
+        try:
+            pid, _ = os.waitpid(-group, os.WNOHANG)
+        except ChildProcessError:  # none left
+            return
+        if pid == 0:
+            if time.monotonic() > deadline:
+                return
+            time.sleep(0.005)
 
 
 def record_group(folder: Path, group: int) -> None:

@@ -248,9 +248,11 @@ def test_what_a_command_leaves_running_is_stopped_after_every_execution(tmp_path
     from stl_lfd.sim.executor import Command
     from tests.processes import alive
 
-    script = "sleep 300 & echo $! > left.pid"
-    run_command(Command.parse(script, shell=True, cwd=tmp_path), {}, tmp_path)
-    assert not alive(int((tmp_path / "left.pid").read_text()))
+    for _ in range(3):
+        script = "sleep 300 & echo $! > left.pid"
+        run_command(Command.parse(script, shell=True, cwd=tmp_path), {}, tmp_path)
+        left = int((tmp_path / "left.pid").read_text())
+        assert not alive(left) and not Path(f"/proc/{left}").exists()  # stopped and reaped: not even a zombie
 
 
 def test_a_misspelt_placeholder_is_named_and_other_braces_are_the_commands():
