@@ -124,6 +124,13 @@ class WaitError(RunError):
     exit_code = 10
 
 
+class BusyError(RunError):
+    """The run is being written by another stlopt process (a `tell` or `ask` of another robot,
+    or a run): try again in a moment; unlike a damaged run, nothing is wrong with it."""
+
+    exit_code = 11
+
+
 def caret_context(text: str, line: int, column: int) -> str:
     """The `line`-th line of `text` (1-based) and a caret under `column` (1-based)."""
     lines = text.splitlines()

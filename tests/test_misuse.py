@@ -74,6 +74,14 @@ def _edit_json_line(number: int, **changes) -> Callable[[Path], None]:
 ASKED_RUN: list[Path] = []  # the workspace's run with one more trial handed out (set by `workspace`)
 
 
+def edit_pending(run: Path, **changes) -> None:
+    """Make `run` the run with a trial handed out, then change fields of that trial in pending.json."""
+    ask_one_more(run)
+    data = json.loads((run / "pending.json").read_text())
+    data["pending"][0].update(changes)
+    (run / "pending.json").write_text(json.dumps(data))
+
+
 def ask_one_more(run: Path) -> None:
     """Make `run` the finished run with one more trial handed out (a pending trial to tell)."""
     shutil.rmtree(run)
@@ -461,6 +469,44 @@ CASES = [
     Case("tell-nothing-pending", ["tell", "{run}", "{csv}"], 9, "no trial is pending; hand out the next one with: stlopt ask"),
     Case("tell-no-signals", ["tell", "{run}"], 2, "give the signals CSV of the pending trial, --failed REASON or --abandon"),
     Case("tell-missing-run", ["tell", "{case}/nope", "{csv}"], 9, "no such run directory"),
+    Case(
+        "tell-point-edited",
+        ["tell", "{case}/run", "{csv}"],
+        9,
+        "trial 4's point (pending.json) or reference",
+        damage=lambda run: edit_pending(run, x=[0.5, 0.5]),
+    ),
+    Case(
+        "tell-point-one-number",
+        ["tell", "{case}/run", "{csv}"],
+        9,
+        "trial 4's point x is not a list of finite numbers",
+        damage=lambda run: edit_pending(run, x=5),
+    ),
+    Case(
+        "tell-robot-escape-in-file",
+        ["tell", "{case}/run", "{csv}"],
+        9,
+        "trial 4's robot is not a name",
+        damage=lambda run: edit_pending(run, robot="\x1b[31mred"),
+    ),
+    Case(
+        "tell-reference-edited",
+        ["tell", "{case}/run", "{csv}"],
+        9,
+        "changed since it was handed out",
+        damage=lambda run: (ask_one_more(run), open(run / "executions" / "trial-0004" / "reference.csv", "a").write("99,0,0,0,0,,,\n")),
+    ),  # fmt: skip
+    Case(
+        "tell-pending-deep",
+        ["tell", "{case}/run", "{csv}"],
+        9,
+        "pending.json: damaged (it nests too deeply)",
+        damage=lambda run: (run / "pending.json").write_text("[" * 50_000),
+    ),
+    Case("ask-robot-newline", ["ask", "{run}", "--robot", "left\narm"], 5, "not printable"),
+    Case("ask-robot-escape", ["ask", "{run}", "--robot", "\x1b[31mred"], 5, "not printable"),
+    Case("ask-robot-long", ["ask", "{run}", "--robot", "r" * 100], 5, "longer than 64 characters"),
     Case("ask-run-with-seed", ["ask", "{run}", "--seed", "3"], 5, "a run directory keeps its own settings"),
     Case("ask-not-a-run", ["ask", "{case}"], 9, "not a run directory of stlopt optimize"),
     Case("ask-damaged-design", ["ask", "{case}/run"], 9, "design.json: damaged", damage=lambda run: (run / "design.json").write_text("[[0.1,")),

@@ -32,7 +32,7 @@ from stl_lfd.optim.runs.directory import SIGNALS_DIR, RunDirectory, check_new_ru
 from stl_lfd.optim.runs.pending import complete, handed_out, live_pending, recorded_in_turn, to_tell
 from stl_lfd.optim.runs.prepare import prepared_from
 from stl_lfd.optim.runs.recorder import Recorder
-from stl_lfd.optim.runs.records import Pending
+from stl_lfd.optim.runs.records import MAX_ROBOT_NAME, Pending, handed_out_fingerprint, robot_name_problem
 from stl_lfd.optim.runs.resume import check_resume
 from stl_lfd.optim.runs.staging import StagedRun
 from stl_lfd.optim.summary import ASK_TELL, Summary
@@ -44,6 +44,7 @@ from stl_lfd.sim.command import EXECUTIONS_DIR, REFERENCE_FILE, gate, reference_
 from stl_lfd.sim.plausibility import check_recorded
 from stl_lfd.sim.reference import Rollout, warn_if_untracked
 from stl_lfd.spelling import spelled
+from stl_lfd.yamlfile import shown
 
 ABANDONED = "abandoned: never told"  # the failure recorded for a trial given up with `tell --abandon`
 
@@ -89,8 +90,8 @@ def ask_new(task: Task, out: Path, inputs: dict[str, Any], learn_progress: Calla
     gate(reference, objective.scene)  # nothing to record a refusal in yet: an error
     design = sobol_points(space.bounds, task.optimizer.initial, task.optimizer.seed)  # once, so that asking for them needs no torch
     with StagedRun(out) as staged:
-        _write_reference(reference, staged.path, 0, objective.scene.gripper_opening)
-        run = staged.commit(task, models, None, None, inputs, Pending(0, "initial", None, 0.0, time.time()), design)
+        fingerprint = _write_reference(reference, staged.path, 0, objective.scene.gripper_opening, None)
+        run = staged.commit(task, models, None, None, inputs, Pending(0, "initial", None, 0.0, time.time(), fingerprint=fingerprint), design)
     run.close()
     return Asked(0, reference_path(Path(out), 0), "initial")
 
@@ -112,6 +113,9 @@ def ask(
         WaitError: as many trials are pending as the task's workers allow, or the next trial is
             chosen from trials not told yet (ask again after a tell).
     """
+    problem = robot_name_problem(robot)
+    if problem:
+        raise ConfigError(f"{spelled('robot')} {shown(robot)}: a robot's name is {MAX_ROBOT_NAME} printable characters at most; this one is {problem}")
     run = RunDirectory.open(out, for_writing=True)
     try:
         task = run.task()
@@ -169,8 +173,8 @@ def _next_trial(run: RunDirectory, task: Task, entries: list[Pending], robot: st
             entries = complete(run, recorder, entries, trial, None)
             on_refused(trial)
             continue
-        _write_reference(reference, run.path, number, objective.scene.gripper_opening)
-        run.write_pending([*entries, Pending(number, phase, x, time.perf_counter() - start, time.time(), robot)])
+        fingerprint = _write_reference(reference, run.path, number, objective.scene.gripper_opening, x)
+        run.write_pending([*entries, Pending(number, phase, x, time.perf_counter() - start, time.time(), robot, fingerprint=fingerprint)])
         return Asked(number, reference_path(run.path, number), phase, robot=robot)
     return None
 
@@ -189,6 +193,7 @@ def tell(out: Path, signals_path: Path | None, failure: str | None = None, trial
     try:
         entries = live_pending(run)
         pending = to_tell(entries, Path(out), trial, signals_path)
+        _check_as_handed_out(run, pending)
         task = run.task()
         reference = read_reference_csv(reference_path(run.path, pending.trial))
         if pending.trial == 0:
@@ -255,10 +260,27 @@ def _check_follows(signals: Any, reference: Reference, errors: np.ndarray, toler
             )
 
 
-def _write_reference(reference: Reference, run_dir: Path, trial: int, open_width: float) -> None:
+def _write_reference(reference: Reference, run_dir: Path, trial: int, open_width: float, x: np.ndarray | None) -> str:
+    """Write the trial's reference CSV; the fingerprint of the trial as handed out."""
     path = reference_path(run_dir, trial)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_reference_csv(reference, path, open_width)
+    return handed_out_fingerprint(trial, x, path.read_bytes())
+
+
+def _check_as_handed_out(run: RunDirectory, pending: Pending) -> None:
+    """Refuse to record a trial whose point (in pending.json) or reference CSV changed since it
+    was handed out: the robustness would be recorded for a point that was not executed."""
+    path = reference_path(run.path, pending.trial)
+    try:
+        reference = path.read_bytes()
+    except OSError as error:
+        raise RunError(f"{path}: cannot read trial {pending.trial}'s reference ({error.strerror or error})") from None
+    if pending.fingerprint and handed_out_fingerprint(pending.trial, pending.x, reference) != pending.fingerprint:
+        raise RunError(
+            f"{run.path}: trial {pending.trial}'s point (pending.json) or reference ({path.relative_to(run.path)}) changed since it was handed out; "
+            "restore them, or delete pending.json to hand the trial out again"
+        )
 
 
 __all__ = ["Asked", "Told", "UnsafeReference", "ask", "ask_new", "tell"]

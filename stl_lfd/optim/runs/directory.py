@@ -96,8 +96,8 @@ class RunDirectory:
             return None
         try:
             data = json.loads(path.read_text())
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-            raise RunError(f"{path}: damaged ({getattr(error, 'msg', error)})") from None
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as error:
+            raise RunError(f"{path}: damaged ({_why(error)})") from None
         if not isinstance(data, dict) or not {"task", "overrides", "fingerprint", "task_file"} <= set(data):
             raise RunError(f"{path}: damaged (expected the keys task_file, task, overrides, fingerprint)")
         return data
@@ -126,6 +126,8 @@ class RunDirectory:
             raise RunError(f"{path}: cannot read ({error})") from None
         except json.JSONDecodeError as error:
             raise RunError(f"{path}:{error.lineno}: not valid JSON ({error.msg})") from None
+        except RecursionError as error:
+            raise RunError(f"{path}: damaged ({_why(error)})") from None
         if not isinstance(data, dict) or not finite(data.get("initial_robustness")):
             raise RunError(f"{path}: damaged (no finite 'initial_robustness')")
         try:
@@ -148,7 +150,7 @@ class RunDirectory:
                 continue
             try:
                 trial = trial_from_json(json.loads(line))
-            except (json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError):
+            except (json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError, RecursionError):
                 if number < len(lines) - 1 or text.endswith("\n"):  # a whole line: edited, not killed
                     raise RunError(f"{path}:{number}: damaged (not a trial record)") from None
                 break
@@ -184,8 +186,8 @@ class RunDirectory:
         try:
             data = json.loads(path.read_text())
             entries = [Pending.from_json(item) for item in (data["pending"] if "pending" in data else [data])]
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
-            raise RunError(f"{path}: damaged ({getattr(error, 'msg', error)}); delete it to ask again") from None
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError, RecursionError) as error:
+            raise RunError(f"{path}: damaged ({_why(error)}); delete it to ask again") from None
         for pending in entries:
             if pending.trial < 0 or (pending.x is None) != (pending.trial == 0) or (pending.told is not None and pending.told.trial != pending.trial):
                 raise RunError(f"{path}: damaged (trial {pending.trial}); delete it to ask again")
@@ -205,8 +207,8 @@ class RunDirectory:
             return None
         try:
             design = np.array(json.loads(path.read_text()), dtype=float)
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, TypeError, ValueError) as error:
-            raise RunError(f"{path}: damaged ({getattr(error, 'msg', error)})") from None
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, TypeError, ValueError, RecursionError) as error:
+            raise RunError(f"{path}: damaged ({_why(error)})") from None
         if design.ndim != 2:
             raise RunError(f"{path}: damaged (not a list of points)")
         return design
@@ -232,6 +234,13 @@ class RunDirectory:
 
     def write_summary(self, summary: Summary) -> None:
         write_atomically(self.path / SUMMARY_FILE, json.dumps(summary.to_json(), indent=2) + "\n")
+
+
+def _why(error: Exception) -> str:
+    """What a damaged record's reading error says, in a few words."""
+    if isinstance(error, RecursionError):
+        return "it nests too deeply"
+    return str(getattr(error, "msg", error))
 
 
 def model_file(base: str, skill: str) -> str:

@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from stl_lfd.errors import RunError
+from stl_lfd.errors import BusyError, RunError
 
 LOCK_FILE = ".lock"
 
@@ -31,7 +31,7 @@ class RunLock:
             stream.seek(0)
             holder = stream.read().strip() or "unknown"
             stream.close()
-            raise RunError(f"{shown}: the run is being written by another stlopt process (PID {holder}); wait for it to end or stop it") from None
+            raise BusyError(f"{shown}: the run is being written by another stlopt process (PID {holder}); wait for it to end or stop it") from None
         stream.seek(0)
         stream.truncate()
         stream.write(f"{os.getpid()}\n")

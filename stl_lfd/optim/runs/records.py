@@ -3,6 +3,7 @@ trials `stlopt ask` handed out and that are not recorded yet (`pending.json`).""
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -25,6 +26,8 @@ class Pending:
         robot: the name it was handed out to ("" when none was given).
         told: the trial as told, while it waits for the trials before it to be recorded (its
             signals are already in the run's signals/ folder); None until it is told.
+        fingerprint: `handed_out_fingerprint` of its number, point and reference when it was
+            handed out ("" in runs asked before fingerprints), checked when it is told.
     """
 
     trial: int
@@ -34,22 +37,53 @@ class Pending:
     asked: float
     robot: str = ""
     told: Trial | None = None
+    fingerprint: str = ""
 
     def to_json(self) -> dict[str, Any]:
         data = {"trial": self.trial, "phase": self.phase, "x": None if self.x is None else [float(value) for value in self.x],
                 "optimizer_seconds": self.optimizer_seconds, "asked": self.asked, "robot": self.robot}  # fmt: skip
+        data |= {"fingerprint": self.fingerprint} if self.fingerprint else {}
         return data | ({"told": trial_to_json(self.told)} if self.told is not None else {})
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "Pending":
+        """An entry of pending.json; ValueError when a field is not what `ask` writes."""
         x = None if data["x"] is None else np.array(data["x"], dtype=float)
+        if x is not None and (x.ndim != 1 or not np.all(np.isfinite(x))):
+            raise ValueError(f"trial {data['trial']}'s point x is not a list of finite numbers")
+        robot, fingerprint = data.get("robot", ""), data.get("fingerprint", "")
+        if not isinstance(robot, str) or robot_name_problem(robot):
+            raise ValueError(f"trial {data['trial']}'s robot is not a name")
+        if not isinstance(fingerprint, str):
+            raise ValueError(f"trial {data['trial']}'s fingerprint is not a string")
         told = trial_from_json(data["told"]) if data.get("told") is not None else None
-        return cls(int(data["trial"]), str(data["phase"]), x, float(data["optimizer_seconds"]), float(data["asked"]), str(data.get("robot", "")), told)
+        return cls(int(data["trial"]), str(data["phase"]), x, float(data["optimizer_seconds"]), float(data["asked"]), robot, told, fingerprint)
 
     @property
     def holder(self) -> str:
         """Who has it, for messages: `robot NAME`, or `the executor` for a nameless ask."""
         return f"robot {self.robot}" if self.robot else "the executor"
+
+
+MAX_ROBOT_NAME = 64
+
+
+def robot_name_problem(name: str) -> str:
+    """What is wrong with a robot's name (printable characters, at most `MAX_ROBOT_NAME`), or ''."""
+    if len(name) > MAX_ROBOT_NAME:
+        return f"longer than {MAX_ROBOT_NAME} characters"
+    if not name.isprintable():
+        return "holds characters that are not printable (a newline, a tab, a terminal escape)"
+    return ""
+
+
+def handed_out_fingerprint(trial: int, x: np.ndarray | None, reference: bytes) -> str:
+    """What identifies a handed-out trial: its number, its point (the exact doubles) and the
+    bytes of its reference CSV."""
+    digest = hashlib.sha256(f"{trial}\n".encode())
+    digest.update(b"-" if x is None else np.ascontiguousarray(x, dtype="<f8").tobytes())
+    digest.update(hashlib.sha256(reference).digest())
+    return digest.hexdigest()
 
 
 def finite(value: Any) -> bool:
