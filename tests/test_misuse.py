@@ -28,6 +28,13 @@ TASK = (
     "spec: @spec@\nmodel: @model@\nbackend: kinematic\nduration: 22\nrate: 50\nparameters: {means: {components: [2, 3]}}\noptimizer: {initial: 2, trials: 3}\n"
 )
 PHI1 = str(ROOT / "specs" / "phi1.stl")
+HOLE_SCENE = (
+    "description: a peg and a hole\nobjects:\n"
+    "  - {{name: peg, shape: cylinder, size: [0.01, 0.1], position: [0.4, 0, 0.05], mass: 0.05}}\n"
+    "  - {{name: wall, shape: box, size: [0.01, 0.03, 0.02], position: [0.52, 0.2, 0.04]}}\n"
+    "frames:\n  peg: {{position: [0.4, 0, 0.05], objects: [peg], into: hole}}\n"
+    "  hole: {{position: [0.55, 0.2, 0.04], objects: [wall], rim: {rim}}}\n"
+)
 
 
 @dataclass
@@ -558,6 +565,29 @@ CASES = [
         {
             "t.yaml": f"spec: {PHI1}\nbehaviour: {ROOT / 'configs' / 'behaviours' / 'pick_insert.yaml'}\nduration: 48\nplace: {{holder: [0.6, 0.2, -1]}}\nparameters: {{insert: {{durations: {{components: all}}}}}}\n"
         },
+    ),
+    Case(
+        "task-place-yaw-degrees",
+        ["optimize", "{case}/t.yaml", "--out", "{case}/out"],
+        5,
+        "'place.holder[3]': the yaw must be in radians, within two turns either way (got 90)",
+        {
+            "t.yaml": f"spec: {PHI1}\nbehaviour: {ROOT / 'configs' / 'behaviours' / 'pick_insert.yaml'}\nduration: 48\nplace: {{holder: [0.6, 0.2, 0.04, 90]}}\nparameters: {{insert: {{durations: {{components: all}}}}}}\n"
+        },
+    ),
+    Case(
+        "scene-rim-above-the-walls",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml"],
+        5,
+        "'frames.hole.rim' (5) puts the hole's rim at z = 5.04 m, outside the frame's objects (z 0.02 to 0.06 m)",
+        {"s.yaml": HOLE_SCENE.format(rim=5.0)},
+    ),
+    Case(
+        "scene-rim-below-the-walls",
+        ["rollout", "{model}", "--scene", "{case}/s.yaml"],
+        5,
+        "'frames.hole.rim' (-0.5) puts the hole's rim at z = -0.46 m",
+        {"s.yaml": HOLE_SCENE.format(rim=-0.5)},
     ),
     task_case(
         "task-command-placeholder",

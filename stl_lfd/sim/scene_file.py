@@ -13,12 +13,13 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from stl_lfd import rotations
 from stl_lfd.errors import ConfigError
-from stl_lfd.limits import MAX_SYMMETRY
+from stl_lfd.limits import MAX_SYMMETRY, MAX_YAW
 from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment, parse_pose, pose_from_values
 from stl_lfd.sim.impedance import NULLSPACE_POSTURES, PANDA_TORQUE_LIMITS
 from stl_lfd.sim.safety import Safety
-from stl_lfd.sim.scene import SHAPES, Camera, Control, Scene, SceneFrame, SceneObject, check_area
+from stl_lfd.sim.scene import SHAPES, Camera, Control, Scene, SceneFrame, SceneObject, check_area, lowest_heights
 from stl_lfd.spelling import spelled
 from stl_lfd.yamlfile import check_keys, number, read_yaml, shown, vector
 
@@ -49,7 +50,10 @@ def placement_from_yaml(scene: Scene, data: Any, path: Path | str, where: str) -
                 f"{path}: '{where}' names {shown(name)}, which is not a frame of the scene {scene.name} (its frames: {', '.join(scene.frame_poses) or 'none'})"
             )
         if isinstance(value, list) and 2 <= len(value) <= 4:
-            placement[name] = pose_from_values(list(vector(value, len(value), path, f"{where}.{name}")), scene.frame_poses[name])
+            values = list(vector(value, len(value), path, f"{where}.{name}"))
+            if len(values) == 4 and abs(values[3]) > MAX_YAW:
+                raise ConfigError(f"{path}: '{where}.{name}[3]': the yaw must be in radians, within two turns either way (got {values[3]:g})")
+            placement[name] = pose_from_values(values, scene.frame_poses[name])
         elif isinstance(value, dict):
             placement[name] = parse_pose(value, path, f"{where}.{name}")
         else:
@@ -128,10 +132,13 @@ def parse_scene(data: dict[str, Any], path: Path) -> Scene:
 
 
 def _check_holes(scene: Scene, path: Path) -> None:
-    """ConfigError for an `into` that names no frame with a `rim`, or whose frame does not start
-    with a movable object."""
+    """ConfigError for a `rim` outside the height of its frame's objects (the hole's walls), an
+    `into` that names no frame with a `rim`, or whose frame does not start with a movable object."""
     rims = [frame.name for frame in scene.frames if frame.rim is not None]
     objects = {item.name: item for item in scene.objects}
+    for frame in scene.frames:
+        if frame.rim is not None:
+            _check_rim(frame, [objects[name] for name in frame.objects], path)
     for frame in scene.frames:
         if frame.into is None:
             continue
@@ -143,6 +150,20 @@ def _check_holes(scene: Scene, path: Path) -> None:
             raise ConfigError(
                 f"{path}: 'frames.{frame.name}.into': the frame's first object, {frame.objects[0]}, must be movable (a mass above 0): it is what goes into the hole"
             )
+
+
+def _check_rim(frame: SceneFrame, walls: list[SceneObject], path: Path) -> None:
+    """The rim (its height above the frame's origin) must lie between the lowest and the highest
+    point of the frame's objects: a rim above the walls would count a shaft lying on top as in
+    the hole, one below them never."""
+    bottoms = [float(lowest_heights(item.shape, item.size, [item.position], rotations.from_euler(*item.orientation)[None])[0]) for item in walls]
+    tops = [2 * item.position[2] - bottom for item, bottom in zip(walls, bottoms)]  # the shapes are symmetric about their centres
+    height = frame.pose.position[2] + frame.rim
+    if not min(bottoms) - 1e-9 <= height <= max(tops) + 1e-9:
+        raise ConfigError(
+            f"{path}: 'frames.{frame.name}.rim' ({frame.rim:g}) puts the hole's rim at z = {height:g} m, outside the frame's objects "
+            f"(z {min(bottoms):g} to {max(tops):g} m); the rim is its height above the frame's origin (z = {frame.pose.position[2]:g} m)"
+        )
 
 
 def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:

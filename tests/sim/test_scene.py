@@ -193,3 +193,18 @@ def test_bad_holes_name_the_file_and_the_frame(tmp_path, peg, cup, message):
     with pytest.raises(ConfigError, match=message) as error:
         load_scene(path)
     assert str(path) in str(error.value)
+
+
+def test_a_rim_within_its_walls_is_accepted_up_to_their_top_and_bottom(tmp_path):
+    from stl_lfd.errors import ConfigError
+    from stl_lfd.sim.scene_file import load_scene
+    from tests.test_misuse import HOLE_SCENE
+
+    for rim, accepted in ((0.02, True), (-0.02, True), (0.0, True), (0.021, False), (-0.021, False)):
+        (tmp_path / "s.yaml").write_text(HOLE_SCENE.format(rim=rim))
+        try:
+            load_scene(str(tmp_path / "s.yaml"))
+        except ConfigError:
+            assert not accepted, rim
+        else:
+            assert accepted, rim
