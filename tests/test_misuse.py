@@ -602,6 +602,9 @@ CASES = [
         command="{run: 'exec {refrence}', shell: true}",
     ),
     task_case("task-scene-relative", "'scene' names ../scenes/s.yaml, which does not exist (paths are relative to the task file)", scene="../scenes/s.yaml"),
+    Case("optimize-ray-nothing-there", ["optimize", "{task}", "--ray", "127.0.0.1:1", "--out", "{case}/out"], 5, "--ray 127.0.0.1:1: nothing answers there"),
+    Case("optimize-ray-not-an-address", ["optimize", "{task}", "--ray", "not an address!", "--out", "{case}/out"], 5, "not a cluster address"),
+    Case("optimize-ray-bad-port", ["optimize", "{task}", "--ray", "127.0.0.1:99999", "--out", "{case}/out"], 5, "not a cluster address"),
     task_case("optimize-workers-zero", "--workers 0 must be from 1 to 256", extra=["--workers", "0"]),
     task_case("optimize-iterations-zero", "--iterations 0 must be at least 1", extra=["-N", "0"]),
     Case(

@@ -107,3 +107,31 @@ def test_a_worker_killed_mid_trial_has_its_trial_run_again_and_recorded_once(tmp
     assert killed < TRIALS  # the kill came before the last trial was recorded
     assert trials_of(tmp_path / "run") == local_trials  # nothing lost, nothing twice
     assert all((tmp_path / "run" / "signals" / f"trial-{number:04d}.csv").is_file() for number in range(1, TRIALS + 1))
+
+
+def test_what_ray_says_when_it_cannot_join_is_one_line_naming_the_cause():
+    from stl_lfd.errors import ConfigError
+    from stl_lfd.optim.runs.ray_workers import join_problem, split_address
+
+    assert split_address("10.0.0.5:6379") == ("10.0.0.5", 6379) and split_address("ray://head:10001") == ("head", 10001)
+    assert split_address("[::1]:6379") == ("::1", 6379)
+    for bad in ("head", "head:port", ":6379x", "a b:6379", "head:0"):
+        with pytest.raises(ConfigError, match="not a cluster address"):
+            split_address(bad)
+    refused = RuntimeError("Failed to connect to GCS: status Unauthenticated: invalid token.\nmore lines")
+    assert "RAY_AUTH_MODE=token" in join_problem(refused) and "\n" not in join_problem(refused)
+    assert join_problem(ConnectionError("Could not find any running Ray instance. Please specify ...")) == "Could not find any running Ray instance"
+
+
+def test_a_head_that_stops_answering_ends_the_run_with_one_line_and_the_resume_hint():
+    script = (
+        "import socket, time\n"
+        "from stl_lfd.optim.runs.ray_workers import watch_head\n"
+        "head = socket.socket(); head.bind(('127.0.0.1', 0)); head.listen()\n"
+        "watch_head('127.0.0.1:%d' % head.getsockname()[1], every=0.1, patience=0.5)\n"
+        "time.sleep(1.0); head.close(); time.sleep(30)\n"
+    )
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert result.returncode == 9
+    assert result.stderr.startswith("error: ") and result.stderr.count("\n") == 1  # options are spelled 'ray' outside the command line
+    assert "127.0.0.1:" in result.stderr and "the cluster's head stopped answering; the recorded trials are kept: continue the run with the same command and" in result.stderr

@@ -15,35 +15,135 @@ from __future__ import annotations
 
 import logging
 import os
+import re
+import socket
+import sys
+import threading
+import time
 import uuid
 from typing import Any, Callable
 
 import numpy as np
 
-from stl_lfd.errors import ConfigError
+from stl_lfd.errors import ConfigError, RunError
 from stl_lfd.optim.runs.workers import THREAD_VARIABLES, WORKER_NICENESS, died
 from stl_lfd.optim.trials import Outcome, describe_error
 from stl_lfd.spelling import spelled
 
 RETRIES = 3  # times a trial whose worker process or node died is run again
+CONNECT_SECONDS = 5.0  # an address that accepts no connection within this is refused
+HEAD_PATIENCE = 5.0  # seconds a joined cluster's head may not answer before the run stops
 _built: tuple[str, Any] | None = None  # in a Ray worker process: the run it last served (its key) and that run's objective
 
 
 def connect(address: str | None) -> None:
     """Join a Ray cluster once per process: `auto` (the cluster this machine belongs to), a
     cluster's address, or None for a new local one; nothing when Ray is already initialised
-    (by the caller, or an earlier run in this process)."""
+    (by the caller, or an earlier run in this process). An address is checked first (its form,
+    and that something answers there within `CONNECT_SECONDS`), and every failure to join is
+    one ConfigError line; once joined, a head that stops answering ends the process with one
+    line (`watch_head`)."""
     try:
         import ray
     except ImportError:
         raise ConfigError(f"{spelled('ray')} needs Ray: pip install 'stlopt[ray]'") from None
     if ray.is_initialized():
         return
+    if address not in (None, "auto"):
+        check_answers(address)
     try:
         ray.init(address=address, runtime_env={"env_vars": {name: "1" for name in THREAD_VARIABLES}}, log_to_driver=False, logging_level=logging.WARNING)
-    except ConnectionError as error:
-        raise ConfigError(f"{spelled('ray')} {address}: {str(error).split('. ')[0]}") from None
+    except Exception as error:  # ConnectionError, RuntimeError, ValueError: whatever Ray raises, one line
+        raise ConfigError(f"{spelled('ray')} {address}: {join_problem(error)}") from None
     _messages_to_stderr()
+    if address is not None:
+        watch_head(address)
+
+
+def check_answers(address: str) -> None:
+    """ConfigError unless `address` is `HOST:PORT` (or `ray://HOST:PORT`) and something accepts
+    a connection there within `CONNECT_SECONDS` (Ray itself would wait for minutes)."""
+    host, port = split_address(address)
+    try:
+        socket.create_connection((host, port), timeout=CONNECT_SECONDS).close()
+    except OSError as error:
+        reason = "no answer" if isinstance(error, TimeoutError) else (error.strerror or str(error))
+        raise ConfigError(
+            f"{spelled('ray')} {address}: nothing answers there ({reason}); start the cluster's head (ray start --head) "
+            "and give the address it prints, or 'auto' on one of its nodes"
+        ) from None
+
+
+def split_address(address: str) -> tuple[str, int]:
+    """`(host, port)` of `HOST:PORT`, `[IPv6]:PORT` or `ray://HOST:PORT`; ConfigError otherwise."""
+    usage = f"{spelled('ray')} {address!r}: not a cluster address (HOST:PORT as 'ray start --head' prints it, or 'auto')"
+    host, colon, port = address.removeprefix("ray://").rpartition(":")
+    host = host.removeprefix("[").removesuffix("]")
+    if not colon or not port.isdigit() or not 0 < int(port) < 65536 or not re.fullmatch(r"[A-Za-z0-9.:_-]+", host or "-"):
+        raise ConfigError(usage)
+    return host, int(port)
+
+
+def join_problem(error: Exception) -> str:
+    """What a failure to join a cluster says, in one line; Ray's token authentication named when
+    it is the cause."""
+    text = " ".join(str(error).split())
+    if "nauthenticated" in text or "authentication" in text.lower() or "auth token" in text.lower():
+        return (
+            "the cluster refused this process (it uses Ray's token authentication): set RAY_AUTH_MODE=token and its token "
+            "in RAY_AUTH_TOKEN or RAY_AUTH_TOKEN_PATH, as on the cluster's nodes ('ray get-auth-token' prints it there)"
+        )
+    return text.split(". ")[0][:300] or type(error).__name__
+
+
+def watch_head(address: str, every: float = 1.0, patience: float = HEAD_PATIENCE) -> threading.Thread:
+    """A daemon thread that checks, every `every` seconds, that the cluster's head (its GCS)
+    accepts connections; after `patience` seconds without, it ends the process with one line
+    and the resume hint, before Ray's own 60 s wait ends it without a word. The trials
+    recorded so far are on disk (each line is synced when written)."""
+    gcs = _gcs_address() or address
+    try:
+        host, port = split_address(gcs)
+    except ConfigError:
+        host, port = None, 0
+
+    def answers() -> bool:
+        try:
+            socket.create_connection((host, port), timeout=every).close()
+        except OSError:
+            return False
+        return True
+
+    def watch() -> None:
+        silent_since = None
+        while host is not None:
+            time.sleep(every)
+            if answers():
+                silent_since = None
+                continue
+            silent_since = silent_since or time.monotonic()
+            if time.monotonic() - silent_since >= patience:
+                sys.stderr.write(
+                    f"error: {spelled('ray')} {address}: the cluster's head stopped answering; the recorded trials are kept: "
+                    f"continue the run with the same command and {spelled('resume')}\n"
+                )
+                sys.stderr.flush()
+                os._exit(RunError.exit_code)
+
+    thread = threading.Thread(target=watch, name="ray-head-watch", daemon=True)
+    thread.start()
+    return thread
+
+
+def _gcs_address() -> str | None:
+    """The address of the joined cluster's GCS (its head), as Ray knows it."""
+    try:
+        import ray
+
+        address = ray.get_runtime_context().gcs_address if ray.is_initialized() else None
+    except Exception:  # an older Ray without it: the address given is watched
+        return None
+    return str(address) if address else None
 
 
 def _messages_to_stderr() -> None:
