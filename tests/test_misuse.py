@@ -576,6 +576,15 @@ CASES = [
         },
     ),
     Case(
+        "task-frame-unknown",
+        ["optimize", "{case}/t.yaml", "--out", "{case}/out", "--quiet"],
+        5,
+        "t.yaml:4:48: 'parameters.insert.means.frame': the model has no frame nohere (its frames: base, shaft, holder)",
+        {
+            "t.yaml": f"spec: {ROOT / 'specs' / 'phi3_strict_objects.stl'}\nbehaviour: {ROOT / 'configs' / 'behaviours' / 'pick_insert.yaml'}\nduration: 48\nparameters: {{insert: {{means: {{components: [1], frame: nohere}}}}}}\n"
+        },
+    ),
+    Case(
         "scene-rim-above-the-walls",
         ["rollout", "{model}", "--scene", "{case}/s.yaml"],
         5,

@@ -86,8 +86,8 @@ class ParameterSpace:
         return {name: float(value) for name, value in zip(self.names, x)}
 
 
-def build_space(model: HSMM, parameters: Parameters, source: Path | str = "task") -> ParameterSpace:
-    """The space that `parameters` (from a task file) selects on `model`."""
+def build_space(model: HSMM, parameters: Parameters, source: Path | str = "task", where: str = "parameters") -> ParameterSpace:
+    """The space that `parameters` (from a task file, at key `where`) selects on `model`."""
     K = model.n_states
     names: list[str] = []
     lower: list[float] = []
@@ -102,7 +102,7 @@ def build_space(model: HSMM, parameters: Parameters, source: Path | str = "task"
 
     means = parameters.means
     mean_slots = []
-    states = _states(means.components, K, source, "parameters.means.components")
+    states = _states(means.components, K, source, f"{where}.means.components")
     groups = [tuple(states)] if means.together else [(state,) for state in states]
     for group in groups:
         stds = np.min([np.sqrt(np.diag(model.covars_[state])) for state in group], axis=0)
@@ -111,7 +111,8 @@ def build_space(model: HSMM, parameters: Parameters, source: Path | str = "task"
             try:
                 coordinate = model.coordinate(name, means.frame)
             except ModelError as error:
-                raise ConfigError(f"{source}: 'parameters.means': {error}") from None
+                key = f"{where}.means.frame" if means.frame is not None else f"{where}.means.coordinates"
+                raise ConfigError(f"{source}: '{key}': {error}") from None
             value, spread = model.means_[group[0], coordinate], means.beta * stds[coordinate]
             frame = f"{means.frame}." if means.frame is not None else ""
             kind = "orient" if name in ROTATION_COLUMNS else "mean"
@@ -120,7 +121,7 @@ def build_space(model: HSMM, parameters: Parameters, source: Path | str = "task"
 
     durations = parameters.durations
     duration_slots = []
-    for state in _states(durations.components, K, source, "parameters.durations.components"):
+    for state in _states(durations.components, K, source, f"{where}.durations.components"):
         value, spread = model.duration_means_[state], durations.width * model.duration_stds_[state]
         add(f"duration[{state + 1}]", value, max(value - spread, model.sample_period_), value + spread)
         duration_slots.append(state)
@@ -216,4 +217,9 @@ class SearchSpace:
 
 def build_search_space(models: dict[str, HSMM], parameters: dict[str, Parameters], source: Path | str = "task") -> SearchSpace:
     """The space of a task: `parameters` (skill -> selection) applied to `models` (skill -> model)."""
-    return SearchSpace({skill: build_space(models[skill], selection, source) for skill, selection in parameters.items()})
+    return SearchSpace({skill: build_space(models[skill], selection, source, _key(skill)) for skill, selection in parameters.items()})
+
+
+def _key(skill: str) -> str:
+    """Where a skill's selection stands in a task file."""
+    return "parameters" if skill == SINGLE_SKILL else f"parameters.{skill}"

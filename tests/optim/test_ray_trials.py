@@ -134,4 +134,7 @@ def test_a_head_that_stops_answering_ends_the_run_with_one_line_and_the_resume_h
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
     assert result.returncode == 9
     assert result.stderr.startswith("error: ") and result.stderr.count("\n") == 1  # options are spelled 'ray' outside the command line
-    assert "127.0.0.1:" in result.stderr and "the cluster's head stopped answering; the recorded trials are kept: continue the run with the same command and" in result.stderr
+    assert (
+        "127.0.0.1:" in result.stderr
+        and "the cluster's head stopped answering; the recorded trials are kept: continue the run with the same command and" in result.stderr
+    )
