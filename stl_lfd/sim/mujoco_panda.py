@@ -16,6 +16,7 @@ libegl1); a one-line error says so where none is found.
 from __future__ import annotations
 
 import os
+import warnings
 from typing import Any
 
 import numpy as np
@@ -37,11 +38,17 @@ OPENGL_ADVICE = "install its OpenGL library (Debian: libegl1 for MUJOCO_GL=egl, 
 def _mujoco() -> Any:
     """The mujoco module, imported with offscreen rendering by EGL unless the user chose otherwise
     (it reads MUJOCO_GL once, at import, and fails there when that OpenGL library is missing)."""
-    os.environ.setdefault("MUJOCO_GL", "egl")
+    if not os.environ.get("MUJOCO_GL"):  # unset or empty
+        os.environ["MUJOCO_GL"] = "egl"
+    backend = os.environ["MUJOCO_GL"]
+    if backend == "glfw" and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise ExecutionError(f"MuJoCo cannot start with MUJOCO_GL=glfw: it needs a display, and DISPLAY is not set; {OPENGL_ADVICE}")
     try:
-        import mujoco
+        with warnings.catch_warnings():  # GLFW's own complaints: the error line says what matters
+            warnings.simplefilter("ignore")
+            import mujoco
     except Exception as error:  # what PyOpenGL raises without its library varies (AttributeError, RuntimeError, ImportError)
-        raise ExecutionError(f"MuJoCo cannot start with MUJOCO_GL={os.environ['MUJOCO_GL']} ({error}); {OPENGL_ADVICE}") from None
+        raise ExecutionError(f"MuJoCo cannot start with MUJOCO_GL={backend} ({error}); {OPENGL_ADVICE}") from None
     return mujoco
 
 
@@ -214,7 +221,9 @@ class MujocoWorld:
         mj = self.mj
         if self._renderer is None:
             try:
-                self._renderer = mj.Renderer(self.model, camera.height, camera.width)
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    self._renderer = mj.Renderer(self.model, camera.height, camera.width)
             except Exception as error:  # no OpenGL library, or a display-less GLFW
                 backend = os.environ.get("MUJOCO_GL", "egl")
                 raise ExecutionError(f"MuJoCo cannot render with MUJOCO_GL={backend} ({error}); {OPENGL_ADVICE}") from None

@@ -62,3 +62,21 @@ def test_a_grasp_rollout_repeats_exactly_in_the_same_world_and_in_a_new_one(engi
             fresh = execute(reference, scene, backend)
     for name, values in first.signals.columns.items():
         assert np.array_equal(values, second.signals.columns[name]) and np.array_equal(values, fresh.signals.columns[name]), name
+
+
+def test_mujoco_gl_glfw_without_a_display_is_one_error_and_empty_means_unset(monkeypatch):
+    import os
+
+    import pytest
+
+    from stl_lfd.errors import ExecutionError
+    from stl_lfd.sim.mujoco_panda import _mujoco
+
+    monkeypatch.setenv("MUJOCO_GL", "glfw")
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    with pytest.raises(ExecutionError, match="MUJOCO_GL=glfw: it needs a display, and DISPLAY is not set"):
+        _mujoco()
+    monkeypatch.setenv("MUJOCO_GL", "")
+    _mujoco()
+    assert os.environ["MUJOCO_GL"] == "egl"
