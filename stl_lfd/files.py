@@ -8,7 +8,9 @@ when complete and removed on any failure, so a crash or Ctrl-C leaves the old fi
 
 from __future__ import annotations
 
+import glob
 import os
+import re
 import stat
 import tempfile
 from contextlib import contextmanager
@@ -121,7 +123,8 @@ def atomic_output(path: Path | str) -> Iterator[Path]:
     block succeeds, removed when it fails. The file gets the permissions of an ordinary new file
     (umask)."""
     path = Path(path)
-    descriptor, name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
+    remove_leftovers(path)
+    descriptor, name = tempfile.mkstemp(prefix=f".{path.stem}.{os.getpid()}.", suffix=f".tmp{path.suffix}", dir=path.parent)
     os.close(descriptor)
     temporary = Path(name)
     try:
@@ -136,6 +139,26 @@ def atomic_output(path: Path | str) -> Iterator[Path]:
     except BaseException:
         temporary.unlink(missing_ok=True)
         raise
+
+
+def remove_leftovers(path: Path) -> None:
+    """Remove the temporary files of `path` that a killed process left (`atomic_output` names
+    them `.STEM.PID.XXXXXXXX.tmpSUFFIX`): those whose process no longer runs."""
+    pattern = re.compile(rf"\.{re.escape(path.stem)}\.(\d+)\.[A-Za-z0-9_]{{8}}\.tmp{re.escape(path.suffix)}")
+    for leftover in path.parent.glob(f".{glob.escape(path.stem)}.*.tmp{glob.escape(path.suffix)}"):
+        match = pattern.fullmatch(leftover.name)
+        if match and not _running(int(match.group(1))):
+            leftover.unlink(missing_ok=True)
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's
+        return True
+    return True
 
 
 def write_atomically(path: Path | str, text: str) -> None:

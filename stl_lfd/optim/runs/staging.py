@@ -25,7 +25,7 @@ from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Task
 from stl_lfd.signals import SignalTable, write_signal_csv
 
-ABANDONED_AFTER = 60.0  # s: a staging folder this old and unlocked was left by a killed process
+ABANDONED_AFTER = 5.0  # s: a staging folder this old and unlocked was left by a killed process (younger: its lock may not be taken yet)
 
 
 def remove_abandoned(destination: Path) -> None:
@@ -59,8 +59,8 @@ class StagedRun:
 
     def __init__(self, destination: Path) -> None:
         self.destination = Path(destination)
+        remove_abandoned(self.destination)  # first: a rerun that finds the run made still tidies up
         check_new_run_path(self.destination)
-        remove_abandoned(self.destination)
         try:
             self.destination.parent.mkdir(parents=True, exist_ok=True)
             self.path = Path(tempfile.mkdtemp(prefix=f".{self.destination.name}.", dir=self.destination.parent))
