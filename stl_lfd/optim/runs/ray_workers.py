@@ -18,10 +18,12 @@ import os
 import re
 import socket
 import sys
+import tempfile
 import threading
 import time
 import uuid
-from typing import Any, Callable
+from contextlib import contextmanager
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -51,10 +53,15 @@ def connect(address: str | None) -> None:
         return
     if address not in (None, "auto"):
         check_answers(address)
-    try:
-        ray.init(address=address, runtime_env={"env_vars": {name: "1" for name in THREAD_VARIABLES}}, log_to_driver=False, logging_level=logging.WARNING)
-    except Exception as error:  # ConnectionError, RuntimeError, ValueError: whatever Ray raises, one line
-        raise ConfigError(f"{spelled('ray')} {address}: {join_problem(error)}") from None
+    with captured_stderr() as printed:  # Ray's core prints a line a second while it retries
+        try:
+            ray.init(address=address, runtime_env={"env_vars": {name: "1" for name in THREAD_VARIABLES}}, log_to_driver=False, logging_level=logging.WARNING)
+        except Exception as error:  # ConnectionError, RuntimeError, ValueError: whatever Ray raises, one line
+            problem = join_problem(error, printed())
+        else:
+            problem = ""
+    if problem:
+        raise ConfigError(f"{spelled('ray')} {address}: {problem}")
     _messages_to_stderr()
     if address is not None:
         watch_head(address)
@@ -84,11 +91,32 @@ def split_address(address: str) -> tuple[str, int]:
     return host, int(port)
 
 
-def join_problem(error: Exception) -> str:
-    """What a failure to join a cluster says, in one line; Ray's token authentication named when
-    it is the cause."""
+@contextmanager
+def captured_stderr() -> Iterator[Callable[[], str]]:
+    """Send what this process (Ray's C++ core included) writes on stderr to a temporary file
+    while the block runs; yields the function that reads what was written (inside the block)."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as capture:
+        os.dup2(capture.fileno(), 2)
+        try:
+            yield lambda: _read_from_start(capture)
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+
+
+def _read_from_start(stream: Any) -> str:
+    stream.seek(0)
+    return stream.read(1_000_000).decode(errors="replace")
+
+
+def join_problem(error: Exception, printed: str = "") -> str:
+    """What a failure to join a cluster says, in one line (`printed`: what Ray printed while it
+    tried); Ray's token authentication named when it is the cause."""
     text = " ".join(str(error).split())
-    if "nauthenticated" in text or "authentication" in text.lower() or "auth token" in text.lower():
+    if "nauthenticated" in text + printed or "InvalidAuthToken" in printed or "auth token" in text.lower():
         return (
             "the cluster refused this process (it uses Ray's token authentication): set RAY_AUTH_MODE=token and its token "
             "in RAY_AUTH_TOKEN or RAY_AUTH_TOKEN_PATH, as on the cluster's nodes ('ray get-auth-token' prints it there)"
@@ -114,6 +142,11 @@ def watch_head(address: str, every: float = 1.0, patience: float = HEAD_PATIENCE
             return False
         return True
 
+    message = (  # spelled here: options are spelled as the command line's in its thread only
+        f"error: {spelled('ray')} {address}: the cluster's head stopped answering; the recorded trials are kept: "
+        f"continue the run with the same command and {spelled('resume')}\n"
+    )
+
     def watch() -> None:
         silent_since = None
         while host is not None:
@@ -123,10 +156,7 @@ def watch_head(address: str, every: float = 1.0, patience: float = HEAD_PATIENCE
                 continue
             silent_since = silent_since or time.monotonic()
             if time.monotonic() - silent_since >= patience:
-                sys.stderr.write(
-                    f"error: {spelled('ray')} {address}: the cluster's head stopped answering; the recorded trials are kept: "
-                    f"continue the run with the same command and {spelled('resume')}\n"
-                )
+                sys.stderr.write(message)
                 sys.stderr.flush()
                 os._exit(RunError.exit_code)
 
