@@ -29,7 +29,7 @@ from stl_lfd.hsmm import learn_from_folder
 from stl_lfd.optim.runs.sweep import local_map
 from stl_lfd.poses import Pose
 from stl_lfd.sim import TrackingWarning, execute, load_scene
-from stl_lfd.skill.behaviour import load_behaviour, reference_for
+from stl_lfd.skill import build_reference, load_behaviour
 
 ROOT = Path(__file__).resolve().parent.parent
 BEHAVIOUR = ROOT / "benchmarks" / "problems" / "behaviours" / "pick_insert_centred.yaml"
@@ -66,7 +66,7 @@ def attempt(job: tuple[int, str, dict[str, Pose]]) -> tuple[bool, str]:
     scene = load_scene("pick_insert").place(placement)
     warnings.simplefilter("ignore", TrackingWarning)  # single-frame skills bump into the shaft: the table says so
     try:
-        signals = execute(reference_for(models, behaviour, scene.gripper_opening, 48, scene.frame_poses), scene, "pybullet").signals
+        signals = execute(build_reference(models, behaviour, scene.gripper_opening, 48, scene.frame_poses), scene, "pybullet").signals
     except Exception as error:  # a grasp with nothing in reach fails the rollout
         return False, str(error).split(":")[0]
     shaft = np.array([signals.columns[f"shaft_{axis}"] for axis in "xyz"]).T

@@ -16,7 +16,7 @@ from pathlib import Path
 from benchmarks._timing import Row, median_seconds, print_table
 from stl_lfd.hsmm import learn_from_folder
 from stl_lfd.sim import execute, load_scene, new_backend
-from stl_lfd.skill.execution import reference_of
+from stl_lfd.skill import build_reference
 
 ROOT = Path(__file__).resolve().parent.parent
 SECONDS = 20.0
@@ -25,7 +25,7 @@ REAL_TIME_FACTOR = 20.0  # the simulators' target: at least this many times real
 
 def main() -> None:
     model, _ = learn_from_folder(ROOT / "demos" / "three_regions", 6)
-    reference = reference_of(model, SECONDS)
+    reference = build_reference({"skill": model}, duration=SECONDS)
     scene = load_scene("free_space")
     rows = []
     for engine in ("mujoco", "pybullet"):

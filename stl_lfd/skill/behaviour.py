@@ -2,10 +2,8 @@
 
 A behaviour file (YAML, e.g. `configs/behaviours/pick_insert.yaml`) names a scene and a list
 of steps, each either a skill (`skill: NAME` with `demos: DIR` and `states: K`, or `model:
-FILE`) or an action (`action: grasp|release`, `seconds`). Executing it retrieves each skill
-for its expected duration plus `settle` seconds, holds the last position during actions,
-closes the fingers from a grasp until the next release, and joins everything into one
-reference, so the recorded signal is continuous.
+FILE`) or an action (`action: grasp|release`, `seconds`). `stl_lfd.skill.reference` joins
+them into one reference.
 
 A skill learned with frames (a TP-HSMM) is retrieved for the poses of the scene's frames: a
 step's `frames: {MODEL_FRAME: SCENE_FRAME}` binds them, and frames it leaves out are bound to
@@ -19,18 +17,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping, Sequence
-
-import numpy as np
+from typing import Any, Mapping
 
 from stl_lfd.errors import ConfigError, ModelError
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
 from stl_lfd.hsmm.spread import MinimumSpread, parse_min_spread
 from stl_lfd.poses import Pose
-from stl_lfd.rotations import DOWN
-from stl_lfd.sim import TIME_STEP, Reference
 from stl_lfd.sim.scene_file import scene_reference
-from stl_lfd.skill.execution import references_of
 from stl_lfd.yamlfile import check_keys, integer, number, read_yaml, shown
 
 ACTIONS = ("grasp", "release")
@@ -150,117 +143,6 @@ def _model(step: SkillStep) -> HSMM:
         return load_model(step.model)
     frames = list(step.learn_in) if step.learn_in is not None else None
     return learn_from_folder(step.demos, step.states, frames=frames, min_spread=step.min_spread)[0]
-
-
-def behaviour_reference(
-    behaviour: Behaviour, models: dict[str, HSMM], open_width: float, duration: float | None = None, poses: Mapping[str, Pose] | None = None
-) -> Reference:
-    """One reference for the whole behaviour; padded (holding the last pose) or cut to
-    `duration` seconds when given. Skills with frames are retrieved for the scene's frame
-    `poses` (name -> pose)."""
-    return behaviour_references(behaviour, [models], open_width, duration, poses)[0]
-
-
-def behaviour_references(
-    behaviour: Behaviour, models: Sequence[dict[str, HSMM]], open_width: float, duration: float | None = None, poses: Mapping[str, Pose] | None = None
-) -> list[Reference]:
-    """`behaviour_reference` of N sets of the behaviour's skills (the same skills with other
-    parameters), each skill step retrieved for all of them together."""
-    poses = poses or {}
-    retrieved = [
-        references_of(
-            [skills[step.name] for skills in models], [skills[step.name].expected_duration() + step.settle for skills in models], step.name, step.poses(poses)
-        )
-        if isinstance(step, SkillStep)
-        else None
-        for step in behaviour.steps
-    ]
-    starts = _first_positions(behaviour, models, poses) if not isinstance(behaviour.steps[0], SkillStep) else [None] * len(models)
-    return [
-        _joined(behaviour, [pieces[index] if pieces is not None else None for pieces in retrieved], start, open_width, duration)
-        for index, start in enumerate(starts)
-    ]
-
-
-def _joined(behaviour: Behaviour, retrieved: list[Reference | None], start: np.ndarray | None, open_width: float, duration: float | None) -> Reference:
-    """The behaviour's reference from the `retrieved` reference of each skill step (None for
-    actions), starting at `start` (`1 x 3`) when it starts with an action."""
-    pieces: list[np.ndarray] = []
-    grippers: list[np.ndarray] = []
-    skills: list[np.ndarray] = []
-    states: list[np.ndarray] = []
-    turns: list[np.ndarray | None] = []  # each piece's orientations (None: straight down)
-    events: list[tuple[float, str]] = []
-    clock, closed = 0.0, False
-    for step, skill in zip(behaviour.steps, retrieved):
-        if skill is not None:
-            positions, names, followed, turn = skill.positions, skill.skills, skill.states, skill.orientations
-        else:
-            events.append((clock, step.action))
-            closed = step.action == "grasp"
-            positions = np.repeat(pieces[-1][-1:] if pieces else start, _steps(step.seconds), axis=0)
-            names, followed = np.full(len(positions), step.action), np.zeros(len(positions), dtype=int)
-            turn = None if not turns or turns[-1] is None else np.repeat(turns[-1][-1:], len(positions), axis=0)
-        pieces.append(positions)
-        turns.append(turn)
-        grippers.append(np.full(len(positions), 0.0 if closed else open_width))
-        skills.append(names)
-        states.append(followed)
-        clock += len(positions) * TIME_STEP
-    positions, gripper, names, followed = np.concatenate(pieces), np.concatenate(grippers), np.concatenate(skills), np.concatenate(states)
-    if duration is not None:
-        count = _steps(duration) + 1
-        if count > len(positions):  # hold the last sample
-            positions, gripper, names, followed = (
-                np.concatenate([values, np.repeat(values[-1:], count - len(values), axis=0)]) for values in (positions, gripper, names, followed)
-            )
-        positions, gripper, names, followed = positions[:count], gripper[:count], names[:count], followed[:count]
-    orientations = _joined_orientations(turns, pieces, len(positions))
-    times = np.arange(len(positions)) * TIME_STEP
-    kept = tuple((time, action) for time, action in events if time <= times[-1])
-    return Reference(times, positions, gripper, kept, names, followed, orientations)
-
-
-def _joined_orientations(turns: list[np.ndarray | None], pieces: list[np.ndarray], count: int) -> np.ndarray | None:
-    """The pieces' orientations joined (straight down where a piece has none), held at the end
-    or cut to `count` samples; None when no piece turns the hand."""
-    if all(turn is None for turn in turns):
-        return None
-    joined = np.concatenate([turn if turn is not None else np.tile(DOWN, (len(piece), 1)) for turn, piece in zip(turns, pieces)])
-    if count > len(joined):
-        joined = np.concatenate([joined, np.repeat(joined[-1:], count - len(joined), axis=0)])
-    return joined[:count]
-
-
-def _steps(seconds: float) -> int:
-    return max(1, int(round(seconds / TIME_STEP)))
-
-
-def _first_positions(behaviour: Behaviour, models: Sequence[dict[str, HSMM]], poses: Mapping[str, Pose]) -> list[np.ndarray]:
-    """Where each of N sets of skills starts (`1 x 3` each): its first skill's first sample."""
-    step = behaviour.skills[0]
-    firsts = [skills[step.name] for skills in models]
-    return [reference.positions[:1] for reference in references_of(firsts, [2 * first.sample_period_ for first in firsts], step.name, step.poses(poses))]
-
-
-def reference_for(
-    models: dict[str, HSMM], behaviour: Behaviour | None, open_width: float, duration: float | None = None, poses: Mapping[str, Pose] | None = None
-) -> Reference:
-    """The reference of a behaviour, or of the single skill in `models` when there is none;
-    skills with frames for the frame `poses` of the scene."""
-    return references_for([models], behaviour, open_width, duration, poses)[0]
-
-
-def references_for(
-    models: Sequence[dict[str, HSMM]], behaviour: Behaviour | None, open_width: float, duration: float | None = None, poses: Mapping[str, Pose] | None = None
-) -> list[Reference]:
-    """`reference_for` each of N sets of skills (the same skills with other parameters),
-    retrieved together."""
-    if behaviour is not None:
-        return behaviour_references(behaviour, models, open_width, duration, poses)
-    if any(len(skills) != 1 for skills in models):
-        raise ConfigError(f"several skills ({', '.join(next(skills for skills in models if len(skills) != 1))}) but no behaviour to sequence them")
-    return references_of([next(iter(skills.values())) for skills in models], [duration] * len(models), poses=poses)
 
 
 def load_skill(path: str | Path) -> tuple[dict[str, HSMM], Behaviour | None]:

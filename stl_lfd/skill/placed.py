@@ -1,6 +1,6 @@
 """`PlacedSkill`: skills (one model, or a behaviour's) in a scene whose objects stand at one
-placement, turned into a reference and executed. The one way `stlopt rollout`, `stlopt replay`
-and the optimiser's objective execute a skill."""
+placement, turned into a reference (by `stl_lfd.skill.reference`) and executed: how `stlopt
+rollout`, `stlopt replay` and the optimiser's objective execute a skill."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ from stl_lfd.hsmm import HSMM
 from stl_lfd.poses import Pose
 from stl_lfd.sim import DEFAULT_RATE, Backend, Reference, Rollout, Scene, execute, load_scene
 from stl_lfd.sim.scene_file import placement_from_options
-from stl_lfd.skill.behaviour import Behaviour, load_skill, references_for
+from stl_lfd.skill.behaviour import Behaviour, load_skill
+from stl_lfd.skill.reference import build_references
 
 DEFAULT_SCENE = "free_space"
 
@@ -53,7 +54,7 @@ class PlacedSkill:
 
     def references(self, models: Sequence[dict[str, HSMM]]) -> list[Reference]:
         """`reference` of N sets of models (the skills with other parameters), retrieved together."""
-        return references_for(models, self.behaviour, self.scene.gripper_opening, self.duration, self.scene.frame_poses)
+        return build_references(models, self.behaviour, self.scene.gripper_opening, self.duration, self.scene.frame_poses)
 
     def execute(self, backend: str | Backend, rate: float = DEFAULT_RATE, observer: Callable | None = None, reference: Reference | None = None) -> Rollout:
         """Execute the skills (or their `reference`, if already retrieved) on `backend`."""

@@ -8,14 +8,15 @@ import pytest
 
 from stl_lfd.errors import ExecutionError
 from stl_lfd.sim import Reference, TrackingWarning, execute, load_scene, new_backend
-from stl_lfd.skill.execution import reference_of, rollout_model
+from stl_lfd.skill.execution import rollout_model
+from stl_lfd.skill.reference import build_reference
 
 SCENE = load_scene("free_space")
 
 
 @pytest.fixture(scope="module")
 def reference(learned_model):
-    return reference_of(learned_model, duration=20.0)
+    return build_reference({"skill": learned_model}, duration=20.0)
 
 
 ENGINES = ["pybullet", "mujoco"]

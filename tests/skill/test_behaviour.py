@@ -9,7 +9,8 @@ import pytest
 from stl_lfd.errors import ConfigError
 from stl_lfd.optim import load_task
 from stl_lfd.sim import TIME_STEP
-from stl_lfd.skill.behaviour import ActionStep, behaviour_reference, load_behaviour
+from stl_lfd.skill.behaviour import ActionStep, load_behaviour
+from stl_lfd.skill.reference import build_reference
 from tests.conftest import ROOT
 
 BEHAVIOUR = ROOT / "configs" / "behaviours" / "pick_insert.yaml"
@@ -25,7 +26,7 @@ def test_the_bundled_behaviour_reads():
 def test_the_reference_joins_skills_and_actions(learned_model):
     behaviour = load_behaviour(BEHAVIOUR)
     models = {"pick": learned_model, "insert": learned_model}
-    reference = behaviour_reference(behaviour, models, open_width=0.08)
+    reference = build_reference(models, behaviour, open_width=0.08)
     (grasp_time, grasp), (release_time, release) = reference.events
     assert (grasp, release) == ("grasp", "release")
     first_skill = learned_model.expected_duration() + 1.0
@@ -34,7 +35,7 @@ def test_the_reference_joins_skills_and_actions(learned_model):
     assert np.all(reference.gripper[closed] == 0.0) and np.all(reference.gripper[~closed] == 0.08)
     hold = (reference.times >= grasp_time) & (reference.times < grasp_time + 1.0)
     assert np.ptp(reference.positions[hold], axis=0).max() == 0.0  # the hand holds still while grasping
-    padded = behaviour_reference(behaviour, models, 0.08, duration=reference.duration + 5)
+    padded = build_reference(models, behaviour, 0.08, duration=reference.duration + 5)
     assert padded.duration == pytest.approx(reference.duration + 5, abs=TIME_STEP)
     assert np.all(padded.positions[-1] == reference.positions[-1])
 
@@ -90,7 +91,7 @@ def test_the_unoptimised_behaviour_picks_then_pushes_the_shaft_onto_the_holder(p
     from stl_lfd.sim import TrackingWarning, execute, load_scene
 
     behaviour, scene = load_behaviour(BEHAVIOUR), load_scene("pick_insert")
-    reference = behaviour_reference(behaviour, pick_insert_models, scene.gripper_opening, 48, scene.frame_poses)
+    reference = build_reference(pick_insert_models, behaviour, scene.gripper_opening, 48, scene.frame_poses)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TrackingWarning)
         signals = execute(reference, scene, engine).signals  # (that it repeats exactly: tests/sim/test_mujoco.py)
@@ -119,7 +120,7 @@ def test_a_batch_of_behaviour_references_is_each_reference_alone(pick_insert_mod
     """Method `plan` retrieves the references of many candidate points together: exactly the
     reference of each alone (its trial on the kinematic backend executes it)."""
     from stl_lfd.sim import load_scene
-    from stl_lfd.skill.behaviour import behaviour_references
+    from stl_lfd.skill.reference import build_references
 
     behaviour, scene = load_behaviour(BEHAVIOUR), load_scene("pick_insert")
     rng = np.random.default_rng(0)
@@ -129,9 +130,9 @@ def test_a_batch_of_behaviour_references_is_each_reference_alone(pick_insert_mod
         skills["pick"].duration_means_ = skills["pick"].duration_means_ * rng.uniform(0.8, 1.2, size=skills["pick"].n_states)
         skills["insert"].means_ = skills["insert"].means_ + rng.normal(scale=0.005, size=skills["insert"].means_.shape)
         sets.append(skills)
-    batch = behaviour_references(behaviour, sets, scene.gripper_opening, 48, scene.frame_poses)
+    batch = build_references(sets, behaviour, scene.gripper_opening, 48, scene.frame_poses)
     for skills, reference in zip(sets, batch):
-        alone = behaviour_reference(behaviour, skills, scene.gripper_opening, 48, scene.frame_poses)
+        alone = build_reference(skills, behaviour, scene.gripper_opening, 48, scene.frame_poses)
         assert reference.events == alone.events
         for name in ("times", "positions", "gripper", "skills", "states"):
             assert np.array_equal(getattr(reference, name), getattr(alone, name)), name
