@@ -222,7 +222,7 @@ def size_rows() -> list[Row]:
                 path.write_text(make(count))
                 megabytes = path.stat().st_size / 1e6
                 start = time.perf_counter()
-                evaluate_file(path, signal)
+                evaluate_file(path, signal, "classic")
                 seconds = time.perf_counter() - start
                 per_megabyte.append(seconds / megabytes)
             note = f"{per_megabyte[1]:.2f} s/MB, {per_megabyte[1] / per_megabyte[0]:.2f}x the s/MB at {megabytes / 10:.2f} MB"

@@ -4,6 +4,7 @@ the command line builds its choices from them. A leaf module (no imports), so th
 their registries, `stl_lfd.optim.methods` and `stl_lfd.sim.registry`, which a new one joins.)"""
 
 SEMANTICS = ("classic", "new")  # space robustness; the robustness of Varnai & Dimarogonas
+DEFAULT_SEMANTICS = "new"  # the paper's, at every entry point (command line, task files, Python)
 # The wrist force-torque sensor: external force (N) and torque (Nm) in the robot base frame.
 WRENCH_SIGNALS = ("fx", "fy", "fz", "tx", "ty", "tz")
 # What every rollout records (then each object frame's NAME_x, NAME_y, NAME_z and NAME_tilt, and

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import typer
 
+from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.cli.options import SemanticsOption
 from stl_lfd.cli.program import PlainUsage, app, one_blas_thread, user_errors
 
@@ -16,7 +17,7 @@ from stl_lfd.cli.program import PlainUsage, app, one_blas_thread, user_errors
 def robustness(
     spec: Path = typer.Argument(..., metavar="SPEC", help="STL specification file (.stl)."),
     signal_csv: str = typer.Argument(..., metavar="SIGNAL_CSV", help="Signal CSV with a time column t; '-' reads stdin."),
-    semantics: SemanticsOption = typer.Option(SemanticsOption.classic, help="classic space robustness or the paper's new robustness."),
+    semantics: SemanticsOption = typer.Option(SemanticsOption(DEFAULT_SEMANTICS), help="The paper's new robustness, or the classic space robustness."),
     nu: float = typer.Option(1.0, help="Sharpness of the new robustness (> 0); larger is closer to classic."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object instead of the bare number."),
 ) -> None:
@@ -24,8 +25,8 @@ def robustness(
 
     The robustness is the value at the first sample; it is positive exactly when the signal
     satisfies the specification. Without --json, stdout gets the number and stderr a verdict
-    naming the semantics. The default is the classic robustness; 'stlopt optimize' scores
-    with the new one by default (--semantics new reproduces its numbers; the verdicts agree).
+    naming the semantics. The default is the paper's new robustness, as 'stlopt optimize'
+    scores with; --semantics classic gives the space robustness (the verdicts agree).
 
     Example:
 

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
+from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM
 from stl_lfd.limits import samples_problem
@@ -90,7 +91,7 @@ def optimize(
     duration: float,
     scene: str = "free_space",
     backend: str = DEFAULT_BACKEND,
-    semantics: str = "new",
+    semantics: str = DEFAULT_SEMANTICS,
     nu: float = 1.0,
     rate: float = 100.0,
     behaviour: str | Path | None = None,

@@ -17,6 +17,7 @@ import os
 from pathlib import Path
 from typing import Any, Callable
 
+from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.errors import ConfigError
 from stl_lfd.optim.task import Task, load_task, parse_task
 from stl_lfd.sim.registry import DEFAULT_BACKEND
@@ -26,7 +27,7 @@ from stl_lfd.yamlfile import read_yaml
 DEFAULTS: dict[str, Any] = {
     "scene": "free_space",
     "backend": DEFAULT_BACKEND,
-    "semantics": "new",
+    "semantics": DEFAULT_SEMANTICS,
     "rate": 100,
     "optimizer": {"method": "plan", "initial": 8, "trials": 32, "seed": 0},
 }

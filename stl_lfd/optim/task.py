@@ -11,7 +11,7 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
-from stl_lfd.choices import SEMANTICS
+from stl_lfd.choices import DEFAULT_SEMANTICS, SEMANTICS
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_PLACEMENTS, MAX_STATES, samples_problem
 from stl_lfd.optim.settings import OPTIMIZER_KEYS, SINGLE_SKILL, Optimizer, Parameters, choice, located, optimizer_from_yaml, parameters_from_yaml
@@ -189,7 +189,7 @@ def parse_task(data: dict[str, Any], path: Path) -> Task:
         raise ConfigError(f"{path}: give exactly one of 'model' (a model file), 'demos' (a folder to learn from) or 'behaviour' (a behaviour file)")
     base = path.parent
     behaviour = _existing(base, data["behaviour"], path, "behaviour") if "behaviour" in data else None
-    semantics = choice(data.get("semantics", "new"), SEMANTICS, path, "semantics")
+    semantics = choice(data.get("semantics", DEFAULT_SEMANTICS), SEMANTICS, path, "semantics")
     backend = choice(data.get("backend", DEFAULT_BACKEND), backend_names(), path, "backend")
     task = Task(
         name=_name(data.get("name", path.stem), path),

@@ -32,6 +32,7 @@ from typing import Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
+from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.stl import ast
 from stl_lfd.stl.parser import resolve
 from stl_lfd.stl.printer import format_formula
@@ -91,7 +92,7 @@ class SpecParts:
         return float(composed) if values.ndim == 1 else composed
 
 
-def split_spec(spec: ast.Spec | ast.Formula, semantics: SemanticsName | Semantics = "classic", nu: float = 1.0, source: str = "<string>") -> SpecParts:
+def split_spec(spec: ast.Spec | ast.Formula, semantics: SemanticsName | Semantics = DEFAULT_SEMANTICS, nu: float = 1.0, source: str = "<string>") -> SpecParts:
     """The parts of `spec`: the operands of its top-level `&` (following defined names to it),
     or the whole formula when the top is not a conjunction."""
     if not isinstance(semantics, Semantics):

@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.errors import SignalError, SpecError
 from stl_lfd.signals import SignalTable, read_signal_csv
 from stl_lfd.stl import ast, compile_spec, load_spec
@@ -46,13 +47,13 @@ class Evaluation:
         }
 
 
-def evaluate_file(spec_path: str | Path, signal_path: str | Path, semantics: str = "classic", nu: float = 1.0) -> Evaluation:
+def evaluate_file(spec_path: str | Path, signal_path: str | Path, semantics: str = DEFAULT_SEMANTICS, nu: float = 1.0) -> Evaluation:
     """Load, compile and evaluate; raises `StlLfdError` subclasses on bad input."""
     spec = load_spec(spec_path)  # a bad spec is reported before a bad signal file
     return _evaluate(spec, spec_path, read_signal_csv(signal_path), semantics, nu)
 
 
-def evaluate_table(spec_path: str | Path, table: SignalTable, semantics: str = "classic", nu: float = 1.0) -> Evaluation:
+def evaluate_table(spec_path: str | Path, table: SignalTable, semantics: str = DEFAULT_SEMANTICS, nu: float = 1.0) -> Evaluation:
     """Robustness of an in-memory signal table against a specification file."""
     return _evaluate(load_spec(spec_path), spec_path, table, semantics, nu)
 

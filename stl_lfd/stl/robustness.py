@@ -25,6 +25,7 @@ from typing import Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
+from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.errors import SignalError, SpecError, StlNameError
 from stl_lfd.stl import ast
 from stl_lfd.stl.evaluators import TIME_TOLERANCE, Trace, compile_formula, distinct_nodes
@@ -153,7 +154,9 @@ class Robustness:
             )
 
 
-def compile_spec(spec: str | ast.Spec | ast.Formula, semantics: SemanticsName | Semantics = "classic", nu: float = 1.0, source: str = "<string>") -> Robustness:
+def compile_spec(
+    spec: str | ast.Spec | ast.Formula, semantics: SemanticsName | Semantics = DEFAULT_SEMANTICS, nu: float = 1.0, source: str = "<string>"
+) -> Robustness:
     """Compile a specification (STL text, a parsed spec or a formula) into its robustness
     function."""
     if isinstance(spec, str):

@@ -20,6 +20,7 @@ from typing import Any, Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
+from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.stl import ast
 from stl_lfd.stl.components import SpecParts, split_spec
 from stl_lfd.stl.parser import load_spec, parse
@@ -56,21 +57,23 @@ class Spec:
         """The signal names the formula reads."""
         return self.function("classic").signals
 
-    def function(self, semantics: SemanticsName = "new", nu: float = 1.0) -> Robustness:
+    def function(self, semantics: SemanticsName = DEFAULT_SEMANTICS, nu: float = 1.0) -> Robustness:
         """The compiled robustness function (see `stl_lfd.stl.robustness.Robustness`)."""
         key = ("function", semantics, nu)
         if key not in self._compiled:
             self._compiled[key] = compile_spec(self.tree, semantics, nu, self.source)
         return self._compiled[key]
 
-    def parts(self, semantics: SemanticsName = "new", nu: float = 1.0) -> SpecParts:
+    def parts(self, semantics: SemanticsName = DEFAULT_SEMANTICS, nu: float = 1.0) -> SpecParts:
         """The top-level conjuncts and their composition, as the optimiser models them."""
         key = ("parts", semantics, nu)
         if key not in self._compiled:
             self._compiled[key] = split_spec(self.tree, semantics, nu, self.source)
         return self._compiled[key]
 
-    def robustness(self, signals: Mapping[str, ArrayLike], times: ArrayLike, semantics: SemanticsName = "new", nu: float = 1.0) -> float | np.ndarray:
+    def robustness(
+        self, signals: Mapping[str, ArrayLike], times: ArrayLike, semantics: SemanticsName = DEFAULT_SEMANTICS, nu: float = 1.0
+    ) -> float | np.ndarray:
         """Robustness at the first sample: a float, or `B` values for `B x T` signal arrays.
 
         Args:
@@ -79,11 +82,11 @@ class Spec:
         """
         return self.function(semantics, nu)(signals, times)
 
-    def trace(self, signals: Mapping[str, ArrayLike], times: ArrayLike, semantics: SemanticsName = "new", nu: float = 1.0) -> np.ndarray:
+    def trace(self, signals: Mapping[str, ArrayLike], times: ArrayLike, semantics: SemanticsName = DEFAULT_SEMANTICS, nu: float = 1.0) -> np.ndarray:
         """The robustness signal at every sample: `T` (or `B x T`)."""
         return self.function(semantics, nu).trace(signals, times)
 
-    def components(self, signals: Mapping[str, ArrayLike], times: ArrayLike, semantics: SemanticsName = "new", nu: float = 1.0) -> dict[str, float]:
+    def components(self, signals: Mapping[str, ArrayLike], times: ArrayLike, semantics: SemanticsName = DEFAULT_SEMANTICS, nu: float = 1.0) -> dict[str, float]:
         """The robustness of each top-level conjunct by its text (one trace, not a batch)."""
         parts = self.parts(semantics, nu)
         return dict(zip(parts.names, np.asarray(parts(signals, times), dtype=float).tolist()))

@@ -54,3 +54,19 @@ def test_a_batch_gives_one_row_of_parts_per_trace():
     assert values.shape == (3, 4)
     for row, (signals, times) in zip(values, traces):
         np.testing.assert_array_equal(row, parts(signals, times))
+
+
+def test_the_semantics_are_named_once_and_new_is_every_default():
+    import inspect
+    from typing import get_args
+
+    from stl_lfd.choices import DEFAULT_SEMANTICS, SEMANTICS
+    from stl_lfd.optim.default_task import DEFAULTS
+    from stl_lfd.stl import Spec, compile_spec
+    from stl_lfd.stl.evaluate import evaluate_file
+    from stl_lfd.stl.kernels import KERNELS
+    from stl_lfd.stl.semantics import SemanticsName
+
+    assert set(get_args(SemanticsName)) == set(SEMANTICS) == set(KERNELS) and DEFAULT_SEMANTICS == "new"
+    defaults = [inspect.signature(function).parameters["semantics"].default for function in (compile_spec, split_spec, evaluate_file, Spec.robustness)]
+    assert defaults == [DEFAULT_SEMANTICS] * 4 and DEFAULTS["semantics"] == DEFAULT_SEMANTICS

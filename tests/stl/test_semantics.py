@@ -160,7 +160,7 @@ def test_empty_windows_never_give_nan(semantics):
 
 def test_batch_of_traces():
     signals = {"x": np.stack([X["x"], -X["x"]])}
-    assert list(compile_spec(parse("F x > 0"))(signals, TIMES5)) == pytest.approx([0.4, 0.5])
+    assert list(compile_spec(parse("F x > 0"), "classic")(signals, TIMES5)) == pytest.approx([0.4, 0.5])
 
 
 def test_horizon_warning_names_the_lookahead():

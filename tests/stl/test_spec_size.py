@@ -37,9 +37,12 @@ def first_value() -> float:
 
 
 def robustness_command(tmp_path: Path, text: str, *options: str):
+    """`stlopt robustness` of `text` on S1; the classic robustness (the value these tests work
+    out by hand) unless `options` name the semantics."""
     path = tmp_path / "spec.stl"
     path.write_text(text)
-    return path, runner.invoke(app, ["robustness", str(path), str(S1), *options])
+    semantics = () if "--semantics" in options else ("--semantics", "classic")
+    return path, runner.invoke(app, ["robustness", str(path), str(S1), *options, *semantics])
 
 
 # --- nesting past the limit --------------------------------------------------------------------

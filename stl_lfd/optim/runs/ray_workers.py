@@ -76,14 +76,14 @@ def check_answers(address: str) -> None:
     except OSError as error:
         reason = "no answer" if isinstance(error, TimeoutError) else (error.strerror or str(error))
         raise ConfigError(
-            f"{spelled('ray')} {address}: nothing answers there ({reason}); start the cluster's head (ray start --head) "
+            f"{spelled('ray')} {address}: nothing answers there ({reason}); start the cluster's head ('ray start' on the head node) "
             "and give the address it prints, or 'auto' on one of its nodes"
         ) from None
 
 
 def split_address(address: str) -> tuple[str, int]:
     """`(host, port)` of `HOST:PORT`, `[IPv6]:PORT` or `ray://HOST:PORT`; ConfigError otherwise."""
-    usage = f"{spelled('ray')} {address!r}: not a cluster address (HOST:PORT as 'ray start --head' prints it, or 'auto')"
+    usage = f"{spelled('ray')} {address!r}: not a cluster address (HOST:PORT, as 'ray start' prints it on the head node, or 'auto')"
     host, colon, port = address.removeprefix("ray://").rpartition(":")
     host = host.removeprefix("[").removesuffix("]")
     if not colon or not port.isdigit() or not 0 < int(port) < 65536 or not re.fullmatch(r"[A-Za-z0-9.:_-]+", host or "-"):

@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.errors import ConfigError, ExecutionError
 from stl_lfd.optim.runs.directory import trial_skill
 from stl_lfd.sim.registry import backend_class
@@ -58,7 +59,7 @@ def resolve_skill(request: ReplayRequest) -> ReplaySkill:
         spec=request.spec,
         scene=request.scene or (behaviour.scene if behaviour is not None else "free_space"),
         duration=request.duration,
-        semantics=request.semantics or "new",
+        semantics=request.semantics or DEFAULT_SEMANTICS,
         nu=1.0,
         default_video=Path("replay.mp4"),
         placement=request.place,
