@@ -43,15 +43,8 @@ class SpecError(StlLfdError):
         super().__init__(str(self))
 
     def located(self, source: str, text: str | None = None) -> "SpecError":
-        """A copy naming `source` and showing the offending line of `text` (default: the file)."""
+        """A copy naming `source` and showing the offending line of `text` (none without it)."""
         context = self.context
-        if text is None and not context and self.line:
-            from stl_lfd.files import UnreadableFile, read_text  # files raises errors of this module
-
-            try:
-                text = read_text(source, "specification file", 1_000_000)
-            except UnreadableFile:
-                text = None
         if text is not None and self.line:
             context = caret_context(text, self.line, self.column)
         return type(self)(self.message, source, self.line, self.column, context)

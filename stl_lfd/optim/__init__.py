@@ -29,7 +29,7 @@ _HOMES = {
     "resume_run": "stl_lfd.optim.runs.prepare",
     "start_run": "stl_lfd.optim.runs.prepare",
     "RunDirectory": "stl_lfd.optim.runs.directory",
-    "trial_skill": "stl_lfd.optim.runs.directory",
+    "trial_skill": "stl_lfd.optim.runs.replay",
     "ParameterSpace": "stl_lfd.optim.space",
     "SearchSpace": "stl_lfd.optim.space",
     "build_search_space": "stl_lfd.optim.space",

@@ -13,7 +13,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from stl_lfd import rotations
+import stl_lfd.rotations as rotations
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_SYMMETRY, MAX_YAW
 from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment, parse_pose, pose_from_values

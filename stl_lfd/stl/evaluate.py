@@ -10,6 +10,7 @@ from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.errors import SignalError, SpecError
 from stl_lfd.signals import SignalTable, read_signal_csv
 from stl_lfd.stl import ast, compile_spec, load_spec
+from stl_lfd.stl.parser import source_text
 
 
 @dataclass(frozen=True)
@@ -63,7 +64,7 @@ def _evaluate(spec: ast.Spec, spec_path: str | Path, table: SignalTable, semanti
     try:
         value = function(table.columns, table.times)
     except SpecError as error:
-        raise error.located(error.source) from None
+        raise error.located(error.source, source_text(error.source)) from None
     except SignalError as error:
         raise SignalError(f"{table.source}: {error}") from None
     return Evaluation(

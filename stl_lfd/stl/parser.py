@@ -226,12 +226,13 @@ def _syntax_error(error: UnexpectedInput, text: str, source: str) -> StlSyntaxEr
 def _placed(error: SpecError, source: str, text: str | None) -> SpecError:
     """`error` naming `source` and showing the offending line of `text` (default: the file)."""
     if text is None and not error.context and error.line:
-        text = _text_or_none(source)
+        text = source_text(source)
     context = _context(text, error.line, error.column) if text is not None else error.context
     return type(error)(error.message, source, error.line, error.column, context)
 
 
-def _text_or_none(source: str) -> str | None:
+def source_text(source: str) -> str | None:
+    """The text of the specification file `source`, None when it cannot be read."""
     try:
         return read_text(source, "specification file", MAX_SPEC_BYTES)
     except UnreadableFile:

@@ -28,23 +28,21 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
 
-from stl_lfd.errors import ConfigError, RunError
+from stl_lfd.errors import RunError
 from stl_lfd.files import check_output_folder, write_atomically
 from stl_lfd.hsmm import HSMM, load_model, save_model
 from stl_lfd.optim.runs.lock import RunLock
 from stl_lfd.optim.runs.records import Pending, finite, trial_from_json, trial_problem, trial_to_json
 from stl_lfd.optim.settings import SINGLE_SKILL
-from stl_lfd.optim.space import build_search_space
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Task, load_task
-from stl_lfd.optim.trials import Trial, best_trial
+from stl_lfd.optim.trials import Trial
 from stl_lfd.signals import SignalTable, read_signal_csv, write_signal_csv
 from stl_lfd.spelling import spelled
 
@@ -264,44 +262,3 @@ def _load_models(folder: Path, base: str) -> dict[str, HSMM]:
         return {SINGLE_SKILL: load_model(single)}
     prefix = base.replace(".npz", "-")
     return {path.stem[len(prefix) :]: load_model(path) for path in sorted(folder.glob(f"{prefix}*.npz"))}
-
-
-@dataclass(frozen=True)
-class TrialSkill:
-    """The models of one trial of a run (0: the unoptimised skill), and the run's task (its
-    spec, scene, duration, semantics and placements), for `stlopt replay`."""
-
-    trial: int
-    models: dict[str, HSMM]
-    task: Task
-
-
-def trial_skill(path: Path, which: str = "best") -> TrialSkill:
-    """The model of trial `which` (`best`, `initial`/`0`, or a trial number) of a run."""
-    run = RunDirectory.open(path)
-    task, models, trials = run.task(), run.models(), run.trials()
-    if which == "best":
-        best = best_trial(trials)
-        number = best.trial if best is not None else 0
-        if number == 0:
-            raise RunError(f"{path}: the run has no successful trial yet; replay the unoptimised skill with {spelled('trial')} initial")
-    elif which == "initial":
-        number = 0
-    else:
-        number = _trial_number(which, len(trials), path)
-    if number > 0:
-        found = [trial for trial in trials if trial.trial == number]
-        models = build_search_space(models, task.parameters, task.source).apply(models, found[0].x)
-    return TrialSkill(number, models, task)
-
-
-def _trial_number(which: str, finished: int, path: Path) -> int:
-    """`--trial` as a number from 1 to the run's finished trials."""
-    try:
-        number = int(which)
-    except ValueError:
-        raise ConfigError(f"{spelled('trial')} must be 'best', 'initial' or a trial number (got {which!r})") from None
-    if not 1 <= number <= finished:
-        have = f"trials 1 to {finished}" if finished else "no finished trials"
-        raise RunError(f"{path}: no trial {number} (the run has {have}; 'initial' is the unoptimised skill)")
-    return number

@@ -8,8 +8,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from stl_lfd.choices import DEFAULT_SEMANTICS
-from stl_lfd.errors import ConfigError, ExecutionError
-from stl_lfd.optim.runs.directory import trial_skill
+from stl_lfd.errors import ConfigError, ExecutionError, RunError
+from stl_lfd.hsmm import HSMM
+from stl_lfd.optim.runs.directory import RunDirectory
+from stl_lfd.optim.space import build_search_space
+from stl_lfd.optim.task import Task
+from stl_lfd.optim.trials import best_trial
 from stl_lfd.sim.registry import backend_class
 from stl_lfd.skill.behaviour import load_skill
 from stl_lfd.skill.replay import ReplaySkill, filming_backend
@@ -65,3 +69,44 @@ def resolve_skill(request: ReplayRequest) -> ReplaySkill:
         placement=request.place,
         backend=filming_backend(request.backend),
     )
+
+
+@dataclass(frozen=True)
+class TrialSkill:
+    """The models of one trial of a run (0: the unoptimised skill), and the run's task (its
+    spec, scene, duration, semantics and placements), for `stlopt replay`."""
+
+    trial: int
+    models: dict[str, HSMM]
+    task: Task
+
+
+def trial_skill(path: Path, which: str = "best") -> TrialSkill:
+    """The model of trial `which` (`best`, `initial`/`0`, or a trial number) of a run."""
+    run = RunDirectory.open(path)
+    task, models, trials = run.task(), run.models(), run.trials()
+    if which == "best":
+        best = best_trial(trials)
+        number = best.trial if best is not None else 0
+        if number == 0:
+            raise RunError(f"{path}: the run has no successful trial yet; replay the unoptimised skill with {spelled('trial')} initial")
+    elif which == "initial":
+        number = 0
+    else:
+        number = _trial_number(which, len(trials), path)
+    if number > 0:
+        found = [trial for trial in trials if trial.trial == number]
+        models = build_search_space(models, task.parameters, task.source).apply(models, found[0].x)
+    return TrialSkill(number, models, task)
+
+
+def _trial_number(which: str, finished: int, path: Path) -> int:
+    """`--trial` as a number from 1 to the run's finished trials."""
+    try:
+        number = int(which)
+    except ValueError:
+        raise ConfigError(f"{spelled('trial')} must be 'best', 'initial' or a trial number (got {which!r})") from None
+    if not 1 <= number <= finished:
+        have = f"trials 1 to {finished}" if finished else "no finished trials"
+        raise RunError(f"{path}: no trial {number} (the run has {have}; 'initial' is the unoptimised skill)")
+    return number
