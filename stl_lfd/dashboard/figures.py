@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from stl_lfd.dashboard.folder import RunView, inside
+from stl_lfd.optim.trials import best_so_far
 from stl_lfd.signals import SignalTable, read_signal_csv
 
 Figure = dict[str, Any]
@@ -51,12 +52,13 @@ def thinned_trials(numbers: np.ndarray, values: np.ndarray, most: int = MAX_TRIA
     return numbers.tolist(), np.round(values, 6).tolist()
 
 
-def best_so_far(numbers: np.ndarray, values: np.ndarray) -> tuple[list, list]:
-    """The best robustness so far as a step line: its points where it improves, and the last."""
-    finite = np.where(np.isfinite(values), values, -np.inf)
-    running = np.maximum.accumulate(finite) if len(finite) else finite
-    changes = np.flatnonzero(np.r_[True, running[1:] != running[:-1]]) if len(running) else np.empty(0, int)
-    changes = np.unique(np.r_[changes, len(running) - 1]) if len(running) else changes
+def best_so_far_line(numbers: np.ndarray, values: np.ndarray) -> tuple[list, list]:
+    """The best robustness so far (`trials.best_so_far`) as a step line: its points where it
+    improves, and the last."""
+    running = best_so_far(values)
+    if not len(running):
+        return [], []
+    changes = np.unique(np.r_[np.flatnonzero(np.r_[True, running[1:] != running[:-1]]), len(running) - 1])
     changes = changes[np.isfinite(running[changes])]
     return numbers[changes].tolist(), np.round(running[changes], 6).tolist()
 
@@ -65,7 +67,7 @@ def robustness_figure(view: RunView) -> Figure:
     """Each trial's robustness (thinned for the screen), the best so far, zero and the
     unoptimised skill's."""
     numbers, values = np.asarray(view.trials.numbers), np.asarray(view.trials.robustness)
-    best_x, best_y = best_so_far(numbers, values)
+    best_x, best_y = best_so_far_line(numbers, values)
     trial_x, trial_y = thinned_trials(numbers, values)
     data = [
         {"type": "scatter", "mode": "markers", "name": "trial", "x": trial_x, "y": trial_y, "marker": {"color": LATEST}},

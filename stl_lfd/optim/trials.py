@@ -79,6 +79,18 @@ class Trial:
         return trial
 
 
+def best_so_far(robustness: np.ndarray) -> np.ndarray:
+    """The best robustness after each trial (`N`), given each trial's (`N`, NaN for a failed
+    trial): NaN before the first successful trial. Every figure and table of runs uses this."""
+    values = np.asarray(robustness, dtype=float)
+    return np.fmax.accumulate(values) if values.size else values
+
+
+def robustness_of(history: Sequence[Trial]) -> np.ndarray:
+    """Each trial's robustness (`N`), NaN for a failed trial."""
+    return np.array([np.nan if trial.robustness is None else trial.robustness for trial in history], dtype=float)
+
+
 def best_trial(history: Sequence[Trial]) -> Trial | None:
     """The successful trial with the highest robustness (the earliest among equals)."""
     succeeded = [trial for trial in history if trial.robustness is not None]

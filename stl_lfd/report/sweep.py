@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import json
 import warnings
 from pathlib import Path
 
@@ -12,7 +11,9 @@ from matplotlib.figure import Figure
 
 from stl_lfd.errors import RunError
 from stl_lfd.files import atomic_output
+from stl_lfd.optim.runs.directory import RunDirectory
 from stl_lfd.optim.runs.sweep import RUNS_DIR, Group, aggregate, read_table
+from stl_lfd.optim.trials import best_so_far, robustness_of
 
 FIGURE_FILE = "sweep.png"
 
@@ -32,14 +33,9 @@ def table_rows(groups: list[Group]) -> list[list[str]]:
 TABLE_HEADER = ["task", "variant", "method", "satisfied", "median first satisfied trial", "median best robustness", "median wall time per run"]
 
 
-def best_so_far(run_dir: Path) -> np.ndarray:
+def run_best_so_far(run_dir: Path) -> np.ndarray:
     """Best robustness after each trial of a run (NaN before the first success)."""
-    values = []
-    for line in (run_dir / "trials.jsonl").read_text().splitlines():
-        robustness = json.loads(line)["robustness"]
-        values.append(np.nan if robustness is None else robustness)
-    values = np.array(values, dtype=float)
-    return np.fmax.accumulate(values) if values.size else values
+    return best_so_far(robustness_of(RunDirectory(run_dir).trials()))
 
 
 def sweep_figure(out: Path) -> Figure:
@@ -48,7 +44,7 @@ def sweep_figure(out: Path) -> Figure:
     panels: dict[tuple[str, str], dict[str, list[np.ndarray]]] = {}
     for record in records:
         curves = panels.setdefault((record["task"], record["variant"]), {})
-        curves.setdefault(record["method"], []).append(best_so_far(Path(out) / RUNS_DIR / record["cell"]))
+        curves.setdefault(record["method"], []).append(run_best_so_far(Path(out) / RUNS_DIR / record["cell"]))
     figure = Figure(figsize=(6.5 * max(len(panels), 1), 4), layout="constrained")
     for axes, ((task, variant), curves) in zip(np.atleast_1d(figure.subplots(1, max(len(panels), 1), squeeze=False)[0]), panels.items()):
         for index, (method, runs) in enumerate(curves.items()):

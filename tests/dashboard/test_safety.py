@@ -13,7 +13,7 @@ import pytest
 
 from stl_lfd.dashboard.app import create_app
 from stl_lfd.dashboard.board import Dashboard
-from stl_lfd.dashboard.figures import best_so_far, thinned_trials
+from stl_lfd.dashboard.figures import best_so_far_line, thinned_trials
 from stl_lfd.dashboard.pages import index_content, index_signature, run_outputs
 from tests.dashboard.test_pages import words
 
@@ -164,7 +164,7 @@ def test_a_long_run_is_thinned_for_the_screen_without_losing_its_extremes():
     values[12_345], values[150_000], values[7] = 9.0, -9.0, np.nan
     x, y = thinned_trials(numbers, values)
     assert len(x) <= 2000 and 9.0 in y and -9.0 in y and x == sorted(x)
-    best_x, best_y = best_so_far(numbers, values)
+    best_x, best_y = best_so_far_line(numbers, values)
     running = np.fmax.accumulate(np.where(np.isnan(values), -np.inf, values))
     assert best_x[-1] == 200_000 and best_y[-1] == 9.0
     assert all(round(running[number - 1], 6) == value for number, value in zip(best_x, best_y))
@@ -172,7 +172,7 @@ def test_a_long_run_is_thinned_for_the_screen_without_losing_its_extremes():
 
 
 def test_a_run_without_trials_draws_empty_series():
-    x, y = best_so_far(np.array([], dtype=int), np.array([]))
+    x, y = best_so_far_line(np.array([], dtype=int), np.array([]))
     assert x == [] and y == [] and thinned_trials(np.array([1]), np.array([np.nan])) == ([], [])
 
 

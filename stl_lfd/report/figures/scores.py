@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
+from stl_lfd.optim.trials import best_so_far, robustness_of
 from stl_lfd.report.explain import semantics_in_words
 from stl_lfd.report.figures.base import BEST, INITIAL, FigureSpec, ReportOptions
 from stl_lfd.report.run_data import RunData
@@ -107,9 +108,9 @@ def _wrapped(text: str, width: int = 22) -> str:
 
 def _robustness_curves(axes, run: RunData, label_prefix: str, color: str = "tab:blue") -> None:
     numbers = np.array([trial.trial for trial in run.trials], dtype=int)
-    values = np.array([trial.robustness if trial.robustness is not None else np.nan for trial in run.trials], dtype=float)
+    values = robustness_of(run.trials)
     initial = np.array([trial.phase in ("sobol", "design") for trial in run.trials], dtype=bool)
-    best_so_far = np.fmax.accumulate(np.where(np.isnan(values), -np.inf, values))
+    best = best_so_far(values)
     if not label_prefix:
         axes.scatter(
             numbers[initial],
@@ -120,7 +121,7 @@ def _robustness_curves(axes, run: RunData, label_prefix: str, color: str = "tab:
             zorder=3,
         )
         axes.scatter(numbers[~initial], values[~initial], marker="o", color=color, label=f"{run.task.optimizer.method} trials", zorder=3)
-    axes.step(numbers, np.where(np.isfinite(best_so_far), best_so_far, np.nan), where="post", color=color, lw=2, label=f"{label_prefix}best so far")
+    axes.step(numbers, best, where="post", color=color, lw=2, label=f"{label_prefix}best so far")
 
 
 class GpSlices(FigureSpec):
