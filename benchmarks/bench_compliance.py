@@ -24,6 +24,7 @@ from rich.table import Table
 from benchmarks._records import commit
 from benchmarks.bench_phi3 import insertion_and_pick
 from stl_lfd.optim import load_task
+from stl_lfd.optim.inputs import resolve
 from stl_lfd.optim.objective import objective_for, task_models
 from stl_lfd.signals import write_signal_csv
 from stl_lfd.sim import TrackingWarning, new_backend
@@ -37,7 +38,7 @@ CONTACT_TASK = "phi3"
 def unoptimised_rollout(task_name: str, engine: str):
     """The task's skill as learned, executed once on `engine`."""
     task = load_task(ROOT / "configs" / f"{task_name}.yaml").with_overrides(backend="kinematic")
-    _, objective = objective_for(task, task_models(task))
+    _, objective = objective_for(resolve(task), task_models(resolve(task)))
     placed = objective.placed[0]
     with new_backend(engine) as backend, warnings.catch_warnings():
         warnings.simplefilter("ignore", TrackingWarning)

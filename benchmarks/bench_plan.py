@@ -46,10 +46,11 @@ def plans_per_second(count: int) -> tuple[float, float]:
     """Plans per second of phi1's objective (kinematic), `count` points scored in one batch and
     `count` other points one at a time (after a warm-up of both)."""
     from stl_lfd.optim import load_task
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.objective import objective_for, task_models
 
     task = load_task(RUNS["phi1"][0]).with_overrides(backend="kinematic")
-    space, objective = objective_for(task, task_models(task))
+    space, objective = objective_for(resolve(task), task_models(resolve(task)))
     score = objective.plan_score()
     unit = np.random.default_rng(0).random((2 * count + 8, space.dimension))
     batched, alone, warm = (space.lower + part * (space.upper - space.lower) for part in (unit[:count], unit[count : 2 * count], unit[2 * count :]))

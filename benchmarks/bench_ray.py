@@ -43,12 +43,13 @@ def start_up_seconds(task, workers: int) -> float:
     import numpy as np
 
     from stl_lfd.optim import build_search_space
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.objective import ObjectiveFactory, task_models
     from stl_lfd.optim.runs.ray_workers import RayPool
 
-    models = task_models(task)
+    models = task_models(resolve(task))
     x = np.asarray(build_search_space(models, task.parameters, task.source).bounds, dtype=float).mean(axis=0)
-    pool = RayPool(ObjectiveFactory(task, models), "auto")  # the local Ray started in main
+    pool = RayPool(ObjectiveFactory(resolve(task), models), "auto")  # the local Ray started in main
     batches = []
     for first in (1, 1 + workers):
         start = time.perf_counter()

@@ -257,11 +257,12 @@ def _run_tool(task) -> tuple[list[dict], float]:
 def _run_tpe(task, seed: int) -> tuple[list[dict], float]:
     import optuna
 
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.objective import objective_for, task_models
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    models = task_models(task)
-    space, objective = objective_for(task, models)
+    models = task_models(resolve(task))
+    space, objective = objective_for(resolve(task), models)
     initial = objective.evaluate(models).robustness
     study = optuna.create_study(direction="maximize", sampler=optuna.samplers.TPESampler(seed=seed))
     distributions = {name: optuna.distributions.FloatDistribution(low, high) for name, low, high in zip(space.names, space.lower, space.upper)}
@@ -300,12 +301,13 @@ def random_search(problem: str, points: int, seed: int = 12345, held: dict[int, 
     to where the problem's structure says the solutions are (recorded as `directed`)."""
     warnings.simplefilter("ignore")
     from stl_lfd.optim import load_task
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.objective import objective_for, task_models
 
     task = load_task(task_file(problem))
-    models = task_models(task)
+    models = task_models(resolve(task))
     with executed_as(problem):
-        space, objective = objective_for(task, models)
+        space, objective = objective_for(resolve(task), models)
     held = held or {}
     if any(not 0 <= index < space.dimension for index in held):
         raise HeldIndexError(f"{problem}: --hold indices must be in 0..{space.dimension - 1}")

@@ -25,6 +25,7 @@ from torch.quasirandom import SobolEngine
 from benchmarks.bench_suite import ROOT, LaggingBackend
 from benchmarks.robots import VARIANTS
 from stl_lfd.optim import load_task
+from stl_lfd.optim.inputs import resolve
 from stl_lfd.optim.objective import objective_for, task_models
 from stl_lfd.sim.tracking import Execution, TrackingModel
 
@@ -36,8 +37,8 @@ def executions(task_name: str, points: int, backend=None) -> list[Execution]:
     """The executions of `task_name` (configs/) at the unoptimised skill and Sobol points, on
     the task's backend or on `backend`."""
     task = load_task(ROOT / "configs" / f"{task_name}.yaml")
-    models = task_models(task)
-    space, objective = objective_for(task, models)
+    models = task_models(resolve(task))
+    space, objective = objective_for(resolve(task), models)
     if backend is not None:
         objective.backend.close()
         objective.backend = backend

@@ -39,6 +39,7 @@ def one_transfer(job: tuple[str, str, str, int]) -> dict[str, Any]:
     task_name, source, target, seed = job
     warnings.simplefilter("ignore")
     from stl_lfd.optim import finish_run, load_task, start_run, trial_skill
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.objective import objective_for
 
     task = load_task(ROOT / "configs" / f"{task_name}.yaml").with_overrides(seed=seed, backend=source)
@@ -51,7 +52,7 @@ def one_transfer(job: tuple[str, str, str, int]) -> dict[str, Any]:
             return result | {"target_robustness": None, "wall_seconds": round(time.perf_counter() - start, 1)}
         best = trial_skill(Path(folder) / "run", "best")
     result["best_trial"] = best.trial
-    _, objective = objective_for(task.with_overrides(backend=target), best.models)
+    _, objective = objective_for(resolve(task.with_overrides(backend=target)), best.models)
     try:
         outcome = objective.evaluate(best.models)
     finally:

@@ -84,6 +84,7 @@ def optimize(
     """
     from stl_lfd.optim import Overrides, finish_run, resume_run, start_run
     from stl_lfd.optim.default_task import task_to_run
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.runs.resume import inputs_record
     from stl_lfd.progress import TrialPrinter
 
@@ -104,7 +105,8 @@ def optimize(
             task = given.applied_to(file_task)
             check_command_for(task.backend, given.command)
             say = (lambda message: None) if quiet else (lambda message: print(message, file=sys.stderr))
-            prepared = start_run(task, run_dir, say, inputs_record(file_task, given, task))
+            resolved = resolve(task)
+            prepared = start_run(resolved, run_dir, say, inputs_record(file_task, given, resolved))
     skill = "".join(f" {option} {path}" for option, path in (("--demos", demos), ("--model", model)) if path is not None)
     again = f"stlopt optimize {task_file or f'--spec {spec}{skill}'} --out {run_dir} --resume"
     with prepared, user_errors(on_interrupt=f"interrupted; the finished trials are kept. Continue with: {again}"):
@@ -149,6 +151,7 @@ def ask(
         stlopt ask runs/lab --robot left
     """
     from stl_lfd.optim import Overrides, load_task
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.runs.asktell import ask as ask_trial
     from stl_lfd.optim.runs.asktell import ask_new
     from stl_lfd.optim.runs.pending import still_out
@@ -170,8 +173,8 @@ def ask(
             if run_dir.is_dir() and any(run_dir.iterdir()):
                 asked = ask_trial(run_dir, iterations, file_task, given, on_refused=refused, robot=robot)
             else:
-                task = given.applied_to(file_task)
-                asked = ask_new(task, run_dir, inputs_record(file_task, given, task), lambda message: print(message, file=sys.stderr))
+                resolved = resolve(given.applied_to(file_task))
+                asked = ask_new(resolved, run_dir, inputs_record(file_task, given, resolved), lambda message: print(message, file=sys.stderr))
     if asked is None:
         out = still_out(run_dir)
         done = (

@@ -22,6 +22,7 @@ from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM
 from stl_lfd.limits import samples_problem
+from stl_lfd.optim.inputs import resolve
 from stl_lfd.optim.runs.directory import MODEL_FILE, TASK_FILE
 from stl_lfd.optim.runs.prepare import PreparedRun, prepare_objective, start_run
 from stl_lfd.optim.runs.recorder import finish_run
@@ -132,8 +133,9 @@ def optimize(
         placements=tuple(dict(placement) for placement in placements),
     )  # fmt: skip
     if out is None:
-        space, objective, initial, summary = prepare_objective(task, models, spec.tree)
-        prepared = PreparedRun(task, MemoryRun(initial.payload), models, space, objective, [], summary)
+        resolved = resolve(task, spec.tree)
+        space, objective, initial, summary = prepare_objective(resolved, models)
+        prepared = PreparedRun(resolved, MemoryRun(initial.payload), models, space, objective, [], summary)
     else:
         prepared = _start_recorded_run(task, models, spec, Path(out))
     with prepared:

@@ -13,6 +13,7 @@ import numpy as np
 
 from stl_lfd.errors import ConfigError, ExecutionError, SignalError, SpecError
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
+from stl_lfd.optim.inputs import TaskInputs
 from stl_lfd.optim.methods.base import Composition
 from stl_lfd.optim.settings import SINGLE_SKILL
 from stl_lfd.optim.space import SearchSpace, build_search_space
@@ -20,12 +21,12 @@ from stl_lfd.optim.task import Task
 from stl_lfd.optim.trials import Outcome
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
-from stl_lfd.sim import Backend, BackendOptions, CommandBackend, Reference, Scene, load_scene, new_backend
+from stl_lfd.sim import Backend, BackendOptions, CommandBackend, Reference, Scene, new_backend
 from stl_lfd.sim.grasp import GraspModel
 from stl_lfd.sim.tracking import TrackingModel
-from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour
+from stl_lfd.skill.behaviour import Behaviour, behaviour_models
 from stl_lfd.skill.placed import PlacedSkill, placed_scene
-from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
+from stl_lfd.stl import SpecParts, split_spec
 
 # How much of the references it retrieved `plan_references` keeps: method plan's pool of 128
 # candidates and its refinement draws, for a task of phi1's size (about 0.3 MB a reference).
@@ -193,39 +194,38 @@ def reference_bytes(reference: Reference) -> int:
     return sum(value.nbytes for value in vars(reference).values() if isinstance(value, np.ndarray))
 
 
-def task_models(task: Task) -> dict[str, HSMM]:
+def task_models(inputs: TaskInputs) -> dict[str, HSMM]:
     """The skills of a task: learned from its demos, loaded, or those of its behaviour."""
-    if task.behaviour is not None:
-        return behaviour_models(load_behaviour(task.behaviour))
+    task = inputs.task
+    if inputs.behaviour is not None:
+        return behaviour_models(inputs.behaviour)
     if task.demos is not None:
         return {SINGLE_SKILL: learn_from_folder(task.demos, task.states)[0]}
     return {SINGLE_SKILL: load_model(task.model)}
 
 
-def objective_for(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = None, execute: bool = True) -> tuple[SearchSpace, SkillObjective]:
-    """The parameter space and the objective of `task` (with `spec` instead of reading
-    `task.spec` when given; with a backend of its own unless not `execute`); spec problems are
-    found here, before any trial: unknown signals, and windows that reach past the rollout
-    duration."""
+def objective_for(inputs: TaskInputs, models: dict[str, HSMM], execute: bool = True) -> tuple[SearchSpace, SkillObjective]:
+    """The parameter space and the objective of a task (with a backend of its own unless not
+    `execute`); spec problems are found here, before any trial: unknown signals, and windows
+    that reach past the rollout duration."""
+    task = inputs.task
     space = build_search_space(models, task.parameters, task.source)
-    spec = load_spec(task.spec) if spec is None else spec
-    parts = split_spec(spec, task.semantics, task.nu, source=str(task.spec))
+    parts = split_spec(inputs.spec, task.semantics, task.nu, source=str(task.spec))
     horizon = max(function.horizon for function in parts.functions)  # a conjunction looks as far as its parts
     if horizon > task.duration + 1e-9:
         raise ConfigError(
             f"{task.source}: the spec {task.spec.name} looks {horizon:g} s ahead but rollouts last "
             f"{task.duration:g} s ('duration'); lengthen the rollouts or shorten the spec's windows"
         )
-    scene = load_scene(task.scene)
+    scene = inputs.scene
     unknown = sorted(parts.signals - set(scene.recorded_signals))
     if unknown:
         raise SpecError(
             f"signal {', '.join(unknown)} is not recorded by rollouts in the scene {scene.name} (they record {', '.join(scene.recorded_signals)})",
             str(task.spec),
         )
-    behaviour = load_behaviour(task.behaviour) if task.behaviour is not None else None
     backend = new_backend(task.backend, BackendOptions(command=task.command)) if execute else None
-    return space, SkillObjective(models, space, task, behaviour, scene, parts, backend)
+    return space, SkillObjective(models, space, task, inputs.behaviour, scene, parts, backend)
 
 
 def spec_composition(parts: SpecParts) -> Composition:
@@ -246,16 +246,17 @@ def placement_composition(parts: SpecParts, placements: tuple[dict[str, Pose], .
 
 @dataclass(frozen=True)
 class ObjectiveFactory:
-    """Makes the objective of `task` in another process (a parallel worker): picklable, so
-    that the worker builds its own world, or its own executor command, once at start-up.
-    `run_dir`: where the command backend's exchange folders go (None: a scratch folder)."""
+    """Makes the objective of a task in another process (a parallel worker): picklable, so
+    that the worker builds its own world, or its own executor command, once at start-up, from
+    the task's `inputs` as read here. `run_dir`: where the command backend's exchange folders go
+    (None: a scratch folder)."""
 
-    task: Task
+    inputs: TaskInputs
     models: dict[str, HSMM]
     run_dir: Path | None = None
 
     def __call__(self) -> SkillObjective:
-        _, objective = objective_for(self.task, self.models)
+        _, objective = objective_for(self.inputs, self.models)
         if self.run_dir is not None:
             objective.exchange_in(self.run_dir)
         return objective

@@ -7,7 +7,7 @@ types and bounds that make no sense are `ConfigError`s naming the file and the k
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +32,8 @@ class Task:
     (`skill` for a single skill) to what is optimised in it. `placements` lists where the
     scene's object frames stand (frame -> pose, the others at the scene's poses); each trial
     executes once per placement and scores the worst. Empty: the scene as it is.
+    `loaded_behaviour`: the behaviour file as `load_task` read it (a `Behaviour`), so that
+    nothing reads it again (`stl_lfd.optim.inputs`).
     """
 
     name: str
@@ -51,6 +53,7 @@ class Task:
     source: Path
     command: Command | None = None
     placements: tuple[dict[str, Pose], ...] = ()
+    loaded_behaviour: Any = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         needs_command = backend_class(self.backend).capabilities.needs_command
@@ -189,6 +192,7 @@ def parse_task(data: dict[str, Any], path: Path) -> Task:
         raise ConfigError(f"{path}: give exactly one of 'model' (a model file), 'demos' (a folder to learn from) or 'behaviour' (a behaviour file)")
     base = path.parent
     behaviour = _existing(base, data["behaviour"], path, "behaviour") if "behaviour" in data else None
+    loaded = _load_behaviour(behaviour) if behaviour is not None else None
     semantics = choice(data.get("semantics", DEFAULT_SEMANTICS), SEMANTICS, path, "semantics")
     backend = choice(data.get("backend", DEFAULT_BACKEND), backend_names(), path, "backend")
     task = Task(
@@ -198,16 +202,17 @@ def parse_task(data: dict[str, Any], path: Path) -> Task:
         demos=_existing(base, data["demos"], path, "demos") if "demos" in data else None,
         behaviour=behaviour,
         states=integer(data.get("states", 6), path, "states", minimum=1, maximum=MAX_STATES),
-        scene=scene_reference(str(data["scene"]), path, "task") if "scene" in data else _behaviour_scene(behaviour) if behaviour else "free_space",
+        scene=scene_reference(str(data["scene"]), path, "task") if "scene" in data else loaded.scene if loaded is not None else "free_space",
         backend=backend,
         semantics=semantics,
         nu=number(data.get("nu", 1.0), path, "nu", positive=True),
         duration=number(data["duration"], path, "duration", positive=True),
         rate=number(data.get("rate", 100.0), path, "rate", positive=True),
-        parameters=_skill_parameters(data.get("parameters", {}), path, behaviour),
+        parameters=_skill_parameters(data.get("parameters", {}), path, loaded),
         optimizer=optimizer_from_yaml(data.get("optimizer", {}), path),
         source=path,
         command=_command(data["command"], path) if "command" in data else None,
+        loaded_behaviour=loaded,
     )
     if "place" in data or "placements" in data:
         task = replace(task, placements=_placements(data, path, task.scene))
@@ -217,10 +222,12 @@ def parse_task(data: dict[str, Any], path: Path) -> Task:
     return task
 
 
-def _behaviour_scene(behaviour: Path) -> str:
+def _load_behaviour(path: Path) -> Any:
+    """The behaviour file, read from its resolved path (so that the paths inside it are the same
+    whether a task file names it relatively or a run's record absolutely)."""
     from stl_lfd.skill.behaviour import load_behaviour
 
-    return load_behaviour(behaviour).scene
+    return load_behaviour(path.resolve())
 
 
 def _placements(data: dict[str, Any], path: Path, scene_name: str) -> tuple[dict[str, Pose], ...]:
@@ -238,13 +245,11 @@ def _placements(data: dict[str, Any], path: Path, scene_name: str) -> tuple[dict
     return tuple(placement_from_yaml(scene, item, path, f"placements[{index}]") for index, item in enumerate(items))
 
 
-def _skill_parameters(data: Any, path: Path, behaviour: Path | None) -> dict[str, Parameters]:
-    """`parameters` of a single-skill task, or per skill of a behaviour."""
+def _skill_parameters(data: Any, path: Path, behaviour: Any) -> dict[str, Parameters]:
+    """`parameters` of a single-skill task, or per skill of a `behaviour`."""
     if behaviour is None:
         return {SINGLE_SKILL: parameters_from_yaml(data, path, "parameters")}
-    from stl_lfd.skill.behaviour import load_behaviour
-
-    skills = [step.name for step in load_behaviour(behaviour).skills]
+    skills = [step.name for step in behaviour.skills]
     check_keys(data, skills, path, "parameters")
     blocks = {name: parameters_from_yaml(block, path, f"parameters.{name}") for name, block in data.items()}
     if not blocks:

@@ -81,10 +81,8 @@ class RunData:
 def load_run(path: Path) -> RunData:
     run = RunDirectory.open(path)
     task, models = run.task(), run.models()
-    if task.behaviour is not None:  # in the order the behaviour runs them
-        from stl_lfd.skill.behaviour import load_behaviour
-
-        order = [step.name for step in load_behaviour(task.behaviour).skills]
+    if task.loaded_behaviour is not None:  # in the order the behaviour runs them
+        order = [step.name for step in task.loaded_behaviour.skills]
         models = {name: models[name] for name in order if name in models}
     trials = run.trials()
     missing = tuple(str(path.relative_to(run.path)) for path in run.missing_signals())

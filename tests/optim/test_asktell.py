@@ -14,6 +14,7 @@ from typer.testing import CliRunner
 from stl_lfd.cli import app
 from stl_lfd.errors import RunError, SignalError
 from stl_lfd.optim import finish_run, load_task, start_run
+from stl_lfd.optim.inputs import resolve
 from stl_lfd.optim.runs.asktell import ask, ask_new, tell
 from stl_lfd.optim.runs.directory import RunDirectory
 from stl_lfd.optim.runs.resume import inputs_record
@@ -46,7 +47,7 @@ def execute_kinematically(reference_path, scene="free_space", rate=50.0, name="s
 
 def start(tmp_path, model_file, **options):
     task = load_task(task_file(tmp_path, model_file, **options))
-    return task, ask_new(task, tmp_path / "asked", inputs_record(task, Overrides(), task))
+    return task, ask_new(resolve(task), tmp_path / "asked", inputs_record(task, Overrides(), resolve(task)))
 
 
 def loop(run, scene="free_space"):

@@ -7,6 +7,7 @@ import pytest
 
 from stl_lfd.errors import RunError, WaitError
 from stl_lfd.optim import finish_run, load_task, start_run
+from stl_lfd.optim.inputs import resolve
 from stl_lfd.optim.runs.asktell import ABANDONED, ask, ask_new, tell
 from stl_lfd.optim.runs.directory import RunDirectory
 from stl_lfd.optim.runs.resume import inputs_record
@@ -21,7 +22,7 @@ def fleet_task(tmp_path, model_file, trials=6):
     file_task = load_task(task_file(tmp_path, model_file, trials=trials))
     given = Overrides(workers=2)
     task, run = given.applied_to(file_task), tmp_path / "asked"
-    first = ask_new(task, run, inputs_record(file_task, given, task))
+    first = ask_new(resolve(task), run, inputs_record(file_task, given, resolve(task)))
     tell(run, execute_kinematically(first.reference))
     return task, run
 

@@ -20,9 +20,10 @@ PLACEMENTS = """placements:
 
 @pytest.fixture(scope="module")
 def behaviour_models():
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.objective import task_models
 
-    return task_models(load_task(placed_task(Path(__import__("tempfile").mkdtemp()))))
+    return task_models(resolve(load_task(placed_task(Path(__import__("tempfile").mkdtemp())))))
 
 
 def phi1_task(tmp_path: Path, model: Path, frame: str = "") -> Path:
@@ -104,11 +105,12 @@ def test_several_placements_score_the_worst_and_record_each(tmp_path):
 )
 @pytest.mark.slow
 def test_bad_placements_and_frames_name_the_file_and_key(tmp_path, extra, means, message, behaviour_models):
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.objective import objective_for
 
     path = placed_task(tmp_path, extra, means) if means else placed_task(tmp_path, extra)
     with pytest.raises(ConfigError) as error:
-        objective_for(load_task(path), behaviour_models, execute=False)
+        objective_for(resolve(load_task(path)), behaviour_models, execute=False)
     assert str(path) in str(error.value) and __import__("re").search(message, str(error.value)), str(error.value)
 
 
@@ -139,13 +141,14 @@ def test_optimize_from_python_takes_placements():
 
 
 def test_executions_outside_stlopt_take_one_placement(tmp_path):
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.runs.asktell import ask_new
     from stl_lfd.optim.runs.resume import inputs_record
     from stl_lfd.optim.task import Overrides
 
     task = load_task(placed_task(tmp_path))
     with pytest.raises(ConfigError, match="takes one placement"):
-        ask_new(task, tmp_path / "run", inputs_record(task, Overrides(), task))
+        ask_new(resolve(task), tmp_path / "run", inputs_record(task, Overrides(), resolve(task)))
     with pytest.raises(ConfigError, match="several placements need a simulated backend"):  # refused with the task, before any learning
         task.with_overrides(backend="command", command=__import__("stl_lfd").Command.parse("true"))
     assert not (tmp_path / "run").exists()

@@ -153,10 +153,11 @@ def test_plans_scored_together_are_the_plans_scored_alone_and_the_kinematic_tria
     """A batch of plans (their references retrieved together) gives exactly each point's plan
     alone, and exactly the point's trial on the kinematic backend, whose difference from the
     plan method `plan` then learns as 0."""
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.objective import objective_for, task_models
 
     task = load_task(small_task(tmp_path, learned_model_file))
-    space, objective = objective_for(task, task_models(task))
+    space, objective = objective_for(resolve(task), task_models(resolve(task)))
     points = space.lower + np.random.default_rng(0).random((5, space.dimension)) * (space.upper - space.lower)
     plans = objective.plan_score()(points)
     assert plans.shape == (5, len(objective.composition.names))
@@ -170,9 +171,10 @@ def test_kept_references_are_those_retrieved_anew_and_the_oldest_go_beyond_the_b
     they are exactly what a new retrieval gives; past the memory budget the oldest are dropped
     (and retrieved again when asked for)."""
     import stl_lfd.optim.objective as objectives
+    from stl_lfd.optim.inputs import resolve
 
     task = load_task(small_task(tmp_path, learned_model_file))
-    space, objective = objectives.objective_for(task, objectives.task_models(task))
+    space, objective = objectives.objective_for(resolve(task), objectives.task_models(resolve(task)))
     points = space.lower + np.random.default_rng(1).random((4, space.dimension)) * (space.upper - space.lower)
     kept = objective.plan_references(points, keep=True)[0]
     fresh = objective.plan_references(points)[0]
@@ -189,11 +191,12 @@ def test_kept_references_are_those_retrieved_anew_and_the_oldest_go_beyond_the_b
 def test_recordings_on_other_clocks_are_scored_apart_and_as_alone(tmp_path, learned_model_file):
     """`score_all` batches the recordings that share sample times; each outcome is exactly the
     recording's own `score`."""
+    from stl_lfd.optim.inputs import resolve
     from stl_lfd.optim.objective import objective_for, task_models
     from stl_lfd.signals import SignalTable
 
     task = load_task(small_task(tmp_path, learned_model_file))
-    space, objective = objective_for(task, task_models(task))
+    space, objective = objective_for(resolve(task), task_models(resolve(task)))
     points = space.lower + np.random.default_rng(2).random((3, space.dimension)) * (space.upper - space.lower)
     recordings = [outcome.payload for outcome in objective.planned().evaluate_all([space.apply(objective.models, x) for x in points])]
     shorter = SignalTable(recordings[1].times[:-50], {name: values[:-50] for name, values in recordings[1].columns.items()}, source="shorter")

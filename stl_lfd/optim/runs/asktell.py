@@ -18,13 +18,14 @@ any order, and a trial never told can be abandoned (recorded as failed).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
 from stl_lfd.errors import ConfigError, ExecutionError, RunError, SignalError, WaitError
+from stl_lfd.optim.inputs import TaskInputs, resolve
 from stl_lfd.optim.loop import learned_from, next_points
 from stl_lfd.optim.methods.base import sobol_points
 from stl_lfd.optim.objective import SkillObjective, objective_for, task_models
@@ -77,15 +78,17 @@ class Told:
         return self.trial is None or all(entry.trial != self.trial.trial for entry in self.waiting)
 
 
-def ask_new(task: Task, out: Path, inputs: dict[str, Any], learn_progress: Callable[[str], None] = lambda message: None) -> Asked:
-    """Create the run directory `out` for `task`, with trial 0 (the unoptimised skill) pending."""
+def ask_new(resolved: TaskInputs, out: Path, inputs: dict[str, Any], learn_progress: Callable[[str], None] = lambda message: None) -> Asked:
+    """Create the run directory `out` for a task (`resolved`: with its files read), with trial
+    0 (the unoptimised skill) pending; `inputs`: the record of the task file and overrides."""
+    task = resolved.task
     check_new_run_path(Path(out))
     if len(task.placements) > 1:
         raise ConfigError(f"{task.source}: stlopt ask hands out one reference per trial, so it takes one placement ('place'), not {len(task.placements)}")
     if task.model is None:
         learn_progress(f"learning the skills of {task.source.name}")
-    models = task_models(task)
-    space, objective = objective_for(task, models, execute=False)
+    models = task_models(resolved)
+    space, objective = objective_for(resolved, models, execute=False)
     reference = objective.reference(models)
     gate(reference, objective.scene)  # nothing to record a refusal in yet: an error
     design = sobol_points(space.bounds, task.optimizer.initial, task.optimizer.seed)  # once, so that asking for them needs no torch
@@ -118,9 +121,10 @@ def ask(
         raise ConfigError(f"{spelled('robot')} {shown(robot)}: a robot's name is {MAX_ROBOT_NAME} printable characters at most; this one is {problem}")
     run = RunDirectory.open(out, for_writing=True)
     try:
-        task = run.task()
+        resolved = resolve(run.task())
+        task = resolved.task
         if file_task is not None:
-            check_resume(Path(out), task, run.inputs(), file_task, given)
+            check_resume(Path(out), resolved, run.inputs(), file_task, given)
         if trials is not None and trials != task.optimizer.trials:
             done = len(run.trials())
             if trials < done:
@@ -132,7 +136,7 @@ def ask(
         if mine is not None:
             return Asked(mine.trial, reference_path(run.path, mine.trial), mine.phase, again=True, robot=robot)
         _check_room(out, task, entries)
-        return _next_trial(run, task, entries, robot, on_refused)
+        return _next_trial(run, replace(resolved, task=task), entries, robot, on_refused)
     finally:
         run.close()
 
@@ -147,9 +151,10 @@ def _check_room(out: Path, task: Task, entries: list[Pending]) -> None:
         )
 
 
-def _next_trial(run: RunDirectory, task: Task, entries: list[Pending], robot: str, on_refused: Callable[[Trial], None]) -> Asked | None:
+def _next_trial(run: RunDirectory, resolved: TaskInputs, entries: list[Pending], robot: str, on_refused: Callable[[Trial], None]) -> Asked | None:
     """Choose, check and hand out the next trial to `robot` (refused ones recorded on the way)."""
-    prepared = prepared_from(run, task, execute=False)
+    prepared = prepared_from(run, resolved, execute=False)
+    task = resolved.task
     recorder, objective = Recorder(prepared, ASK_TELL), prepared.objective
     entries = recorded_in_turn(recorder, entries)
     design = run.initial_design()
@@ -194,14 +199,14 @@ def tell(out: Path, signals_path: Path | None, failure: str | None = None, trial
         entries = live_pending(run)
         pending = to_tell(entries, Path(out), trial, signals_path)
         _check_as_handed_out(run, pending)
-        task = run.task()
+        resolved = resolve(run.task())
         reference = read_reference_csv(reference_path(run.path, pending.trial))
         if pending.trial == 0:
             if failure is not None:
                 raise RunError(f"{out}: the unoptimised skill (trial 0) cannot be told as failed: the run needs its signals to start")
-            space, objective = objective_for(task, run.models(), execute=False)
-            return _tell_initial(run, task, space, _scored(objective, reference, Path(signals_path), run, 0), pending)
-        prepared = prepared_from(run, task, execute=False)
+            space, objective = objective_for(resolved, run.models(), execute=False)
+            return _tell_initial(run, resolved.task, space, _scored(objective, reference, Path(signals_path), run, 0), pending)
+        prepared = prepared_from(run, resolved, execute=False)
         outcome = f"execution failed: {failure}" if failure is not None else _scored(prepared.objective, reference, Path(signals_path), run, pending.trial)
         seconds = max(time.time() - pending.asked, 0.0)
         told = Trial.of_outcome(pending.trial, pending.phase, pending.x, outcome, pending.optimizer_seconds, seconds)

@@ -4,7 +4,7 @@ the run directory created in one step), or reopened from its run directory."""
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -15,6 +15,7 @@ from stl_lfd.errors import RunError
 from stl_lfd.files import write_atomically
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim.features import path_features
+from stl_lfd.optim.inputs import TaskInputs, resolve
 from stl_lfd.optim.loop import search_method
 from stl_lfd.optim.methods.base import Planner, Problem, SearchMethod
 from stl_lfd.optim.objective import SkillObjective, objective_for, task_models
@@ -33,10 +34,11 @@ from stl_lfd.stl import ast
 
 @dataclass
 class PreparedRun:
-    """A run ready for its remaining trials: its task, where it records (`RunStore`), the skills,
-    the parameter space, the objective, the trials so far and the summary."""
+    """A run ready for its remaining trials: its task's inputs (read once), where it records
+    (`RunStore`), the skills, the parameter space, the objective, the trials so far and the
+    summary."""
 
-    task: Task
+    inputs: TaskInputs
     run: RunStore
     models: dict[str, HSMM]
     space: SearchSpace
@@ -44,6 +46,10 @@ class PreparedRun:
     history: list[Trial]
     summary: Summary
     initial_signals: SignalTable | None = None  # when the run started in this process
+
+    @property
+    def task(self) -> Task:
+        return self.inputs.task
 
     @cached_property
     def tracking(self) -> RunTracking | None:
@@ -82,10 +88,11 @@ class PreparedRun:
         self.close()
 
 
-def prepare_objective(task: Task, models: dict[str, HSMM], spec: ast.Spec | None = None) -> tuple[SearchSpace, SkillObjective, Outcome, Summary]:
+def prepare_objective(inputs: TaskInputs, models: dict[str, HSMM]) -> tuple[SearchSpace, SkillObjective, Outcome, Summary]:
     """`objective_for`, then the unoptimised skill executed once: the space, the objective (which
     the caller closes), the unoptimised outcome and the summary of a run with no trial yet."""
-    space, objective = objective_for(task, models, spec)
+    task = inputs.task
+    space, objective = objective_for(inputs, models)
     try:
         start = time.perf_counter()
         initial = objective.evaluate(models)
@@ -97,7 +104,7 @@ def prepare_objective(task: Task, models: dict[str, HSMM], spec: ast.Spec | None
 
 
 def start_run(
-    task: Task,
+    task: Task | TaskInputs,
     out: Path,
     learn_progress: Callable[[str], None] = lambda message: None,
     inputs: dict[str, Any] | None = None,
@@ -106,18 +113,21 @@ def start_run(
     files: Mapping[str, str] | None = None,
 ) -> PreparedRun:
     """Check `out`, learn or load the model, check the spec, execute the unoptimised skill, then
-    create the run directory with all of that in it. `inputs` is the record of the task file and
-    command-line overrides (`resume.inputs_record`; default: `task` as its own file).
+    create the run directory with all of that in it. `task`: a task, or its inputs already
+    resolved (`optim.inputs.resolve`); `inputs` is the record of the task file and command-line
+    overrides (`resume.inputs_record`; default: `task` as its own file).
 
     From Python objects: `models` instead of the task's, `spec` instead of reading `task.spec`,
     and `files` (name -> text) written into the run directory with the rest, for task paths
     that point into it."""
     check_new_run_path(Path(out))
+    resolved = task if isinstance(task, TaskInputs) else resolve(task, spec)
+    task = resolved.task
     if models is None:
         if task.model is None:
             learn_progress(f"learning the skills of {task.source.name}")
-        models = task_models(task)
-    space, objective = objective_for(task, models, spec)
+        models = task_models(resolved)
+    space, objective = objective_for(resolved, models)
     try:
         with StagedRun(out) as staged:
             for name, text in (files or {}).items():
@@ -126,12 +136,12 @@ def start_run(
             start = time.perf_counter()
             initial = objective.evaluate(models, trial=0)
             summary = Summary.of(task, space, float(initial.robustness), [], time.perf_counter() - start, initial.components)
-            run = staged.commit(task, models, initial.payload, summary, inputs if inputs is not None else inputs_record(task, Overrides(), task, spec))
+            run = staged.commit(task, models, initial.payload, summary, inputs if inputs is not None else inputs_record(task, Overrides(), resolved))
         objective.exchange_in(run.path)
     except BaseException:
         objective.close()
         raise
-    return PreparedRun(task, run, models, space, objective, [], summary, initial.payload)
+    return PreparedRun(resolved, run, models, space, objective, [], summary, initial.payload)
 
 
 def resume_run(out: Path, trials: int | None = None, file_task: Task | None = None, given: Overrides = Overrides()) -> PreparedRun:
@@ -147,9 +157,10 @@ def resume_run(out: Path, trials: int | None = None, file_task: Task | None = No
 
 
 def _reopen(run: RunDirectory, out: Path, trials: int | None, file_task: Task | None, given: Overrides) -> PreparedRun:
-    task = run.task()
+    resolved = resolve(run.task())
+    task = resolved.task
     if file_task is not None:
-        check_resume(Path(out), task, run.inputs(), file_task, given)
+        check_resume(Path(out), resolved, run.inputs(), file_task, given)
     if trials is not None:
         task = task.with_overrides(trials=trials)
     pending = [entry for entry in run.pending() if entry.told is None]
@@ -162,16 +173,18 @@ def _reopen(run: RunDirectory, out: Path, trials: int | None, file_task: Task | 
         raise RunError(
             f"{out}: the recorded signals of finished trials are missing ({listed}); the run cannot go on without them: restore them, or start a new run"
         )
-    return prepared_from(run, task)
+    return prepared_from(run, replace(resolved, task=task))
 
 
-def prepared_from(run: RunDirectory, task: Task, execute: bool = True) -> PreparedRun:
-    """An existing run ready for more trials: its models, space, objective (executing in the
-    run's folder, or only scoring unless `execute`), checked history and summary."""
+def prepared_from(run: RunDirectory, task: Task | TaskInputs, execute: bool = True) -> PreparedRun:
+    """An existing run ready for more trials (its `task`, or the task's inputs already
+    resolved): its models, space, objective (executing in the run's folder, or only scoring
+    unless `execute`), checked history and summary."""
+    resolved = task if isinstance(task, TaskInputs) else resolve(task)
     models = run.models()
-    space, objective = objective_for(task, models, execute=execute)
+    space, objective = objective_for(resolved, models, execute=execute)
     objective.exchange_in(run.path)
     history = run.trials()
     if any(len(trial.x) != space.dimension for trial in history):
         raise RunError(f"{run.path / 'trials.jsonl'}: damaged (the recorded points do not have the task's {space.dimension} parameters)")
-    return PreparedRun(task, run, models, space, objective, history, run.summary())
+    return PreparedRun(resolved, run, models, space, objective, history, run.summary())

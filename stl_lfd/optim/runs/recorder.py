@@ -96,7 +96,7 @@ def trial_pool(prepared: PreparedRun, ray: str | None) -> Any:
     """Who executes the trials of `prepared` besides this process: Ray tasks on the cluster
     `ray`, local worker processes when the task has several workers, or nobody (None)."""
     workers = prepared.task.optimizer.workers
-    make_objective = ObjectiveFactory(prepared.task, prepared.models, prepared.run.path)
+    make_objective = ObjectiveFactory(prepared.inputs, prepared.models, prepared.run.path)
     if ray is not None:
         from stl_lfd.optim.runs.ray_workers import RayPool
 

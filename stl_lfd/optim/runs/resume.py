@@ -12,55 +12,52 @@ from __future__ import annotations
 
 import hashlib
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from stl_lfd.errors import RunError
+from stl_lfd.optim.inputs import TaskInputs
 from stl_lfd.optim.settings import recorded_optimizer
 from stl_lfd.optim.task import Overrides, Task, placements_to_yaml
 from stl_lfd.spelling import spelled
-
-if TYPE_CHECKING:
-    from stl_lfd.stl import ast
 
 # Settings that may differ on resume: the budget, and the name (a label, not part of the problem).
 MAY_CHANGE = ("name",)
 
 
-def inputs_record(file_task: Task, overrides: Overrides, task: Task, spec: ast.Spec | None = None) -> dict[str, Any]:
-    """What `inputs.json` holds for a run of `task`, which is `file_task` with `overrides`
-    (`spec`: the parsed spec, when its file is not written yet)."""
+def inputs_record(file_task: Task, overrides: Overrides, inputs: TaskInputs) -> dict[str, Any]:
+    """What `inputs.json` holds for a run whose task (with its files read: `inputs`) is
+    `file_task` with `overrides`."""
     return {
         "task_file": str(file_task.source.resolve()),
         "task": _comparable(file_task),
         "overrides": {key: _plain(value) for key, value in overrides.given().items() if key != "trials"},
-        "fingerprint": fingerprint(task, spec),
+        "fingerprint": fingerprint(inputs),
     }
 
 
-def fingerprint(task: Task, spec: ast.Spec | None = None) -> dict[str, str]:
+def fingerprint(inputs: TaskInputs) -> dict[str, str]:
     """A digest of each input a run reads from outside its directory, by what it means (the
     parsed spec with its includes, the parsed behaviour and scene), so that editing a comment
-    is not a change. `spec`: the parsed spec instead of reading `task.spec`."""
-    from stl_lfd.sim import load_scene
-    from stl_lfd.stl import format_spec, load_spec
+    is not a change. The behaviour is read from its resolved path (`load_task` and `resolve`
+    read it so), so that the paths inside it are the same from the task file and the run's
+    record."""
+    from stl_lfd.stl import format_spec
 
-    spec = load_spec(task.spec) if spec is None else spec
-    digests = {"spec": _digest(format_spec(spec)), "scene": _digest(repr(load_scene(task.scene)))}
-    if task.behaviour is not None:
-        from stl_lfd.skill.behaviour import load_behaviour
-
-        # resolved, so that the paths inside it are the same from the task file and the run's record
-        digests["behaviour"] = _digest(repr(load_behaviour(Path(task.behaviour).resolve())))
+    digests = {"spec": _digest(format_spec(inputs.spec)), "scene": _digest(repr(inputs.scene))}
+    if inputs.behaviour is not None:
+        digests["behaviour"] = _digest(repr(inputs.behaviour))
     return digests
 
 
-def check_resume(run_path: Path, recorded: Task, inputs: dict[str, Any] | None, file_task: Task, given: Overrides) -> None:
-    """Refuse to resume the run at `run_path` (whose task is `recorded`) with `file_task` and the
-    command-line options `given`, when they ask for something else than the run did.
+def check_resume(run_path: Path, recorded_inputs: TaskInputs, inputs: dict[str, Any] | None, file_task: Task, given: Overrides) -> None:
+    """Refuse to resume the run at `run_path` (whose task, with its files read, is
+    `recorded_inputs`) with `file_task` and the command-line options `given`, when they ask for
+    something else than the run did.
 
     Raises:
         RunError: naming the option, setting or file that differs, with both values.
     """
+    recorded = recorded_inputs.task
     for key, value in given.given().items():
         if key == "trials":
             continue
@@ -78,7 +75,7 @@ def check_resume(run_path: Path, recorded: Task, inputs: dict[str, Any] | None, 
         raise RunError(
             f"{file_task.source}: not the task of the run in {run_path} ('{key}' is {_shown(ours)} here, {_shown(theirs)} in the run's {inputs['task_file']})"
         )
-    now = fingerprint(recorded)
+    now = fingerprint(recorded_inputs)
     for name, digest in inputs["fingerprint"].items():
         if now.get(name) != digest:
             where = {"spec": recorded.spec, "behaviour": recorded.behaviour, "scene": recorded.scene}[name]

@@ -28,6 +28,7 @@ from typing import Any
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_SEED
+from stl_lfd.optim.inputs import resolve
 from stl_lfd.optim.methods import method_names
 from stl_lfd.optim.runs.resume import inputs_record
 from stl_lfd.optim.task import Overrides, Task, parse_task
@@ -145,7 +146,7 @@ def _cell(task_file: Path, variant: str, changes: dict, method: str | None, seed
     task = given.applied_to(file_task)
     task_name = file_task.name
     name = "-".join(part for part in (task_name, variant, task.optimizer.method, f"seed{seed}") if part)
-    return Cell(name, task_name, variant, task.optimizer.method, seed, task, inputs_record(file_task, given, task))
+    return Cell(name, task_name, variant, task.optimizer.method, seed, task, inputs_record(file_task, given, resolve(task)))
 
 
 def merged(base: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
