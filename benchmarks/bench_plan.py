@@ -46,8 +46,8 @@ def plans_per_second(count: int) -> tuple[float, float]:
     """Plans per second of phi1's objective (kinematic), `count` points scored in one batch and
     `count` other points one at a time (after a warm-up of both)."""
     from stl_lfd.optim import load_task
-    from stl_lfd.optim.inputs import resolve
-    from stl_lfd.optim.objective import objective_for, task_models
+    from stl_lfd.optim.inputs import resolve, task_models
+    from stl_lfd.optim.objective import objective_for
 
     task = load_task(RUNS["phi1"][0]).with_overrides(backend="kinematic")
     space, objective = objective_for(resolve(task), task_models(resolve(task)))

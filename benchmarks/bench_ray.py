@@ -43,9 +43,9 @@ def start_up_seconds(task, workers: int) -> float:
     import numpy as np
 
     from stl_lfd.optim import build_search_space
-    from stl_lfd.optim.inputs import resolve
-    from stl_lfd.optim.objective import ObjectiveFactory, task_models
+    from stl_lfd.optim.inputs import resolve, task_models
     from stl_lfd.optim.runs.ray_workers import RayPool
+    from stl_lfd.optim.runs.workers import ObjectiveFactory
 
     models = task_models(resolve(task))
     x = np.asarray(build_search_space(models, task.parameters, task.source).bounds, dtype=float).mean(axis=0)

@@ -257,8 +257,8 @@ def _run_tool(task) -> tuple[list[dict], float]:
 def _run_tpe(task, seed: int) -> tuple[list[dict], float]:
     import optuna
 
-    from stl_lfd.optim.inputs import resolve
-    from stl_lfd.optim.objective import objective_for, task_models
+    from stl_lfd.optim.inputs import resolve, task_models
+    from stl_lfd.optim.objective import objective_for
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     models = task_models(resolve(task))
@@ -301,8 +301,8 @@ def random_search(problem: str, points: int, seed: int = 12345, held: dict[int, 
     to where the problem's structure says the solutions are (recorded as `directed`)."""
     warnings.simplefilter("ignore")
     from stl_lfd.optim import load_task
-    from stl_lfd.optim.inputs import resolve
-    from stl_lfd.optim.objective import objective_for, task_models
+    from stl_lfd.optim.inputs import resolve, task_models
+    from stl_lfd.optim.objective import objective_for
 
     task = load_task(task_file(problem))
     models = task_models(resolve(task))

@@ -2,8 +2,12 @@
 
     task.py, settings.py                 what to optimise and how: task files, `Parameters`,
                                          `Optimizer`, command-line `Overrides`
+    inputs.py                            a task's files read once (`TaskInputs`), its skills
     space.py, features.py                the parameters that move, their bounds; what a GP sees
     objective.py                         a point -> adapted skill -> rollout -> robustness of parts
+    scoring.py, plans.py, placements.py  the objective's pieces: signals scored by the spec's
+                                         parts; many points' references, kept a while; a trial
+                                         at several placements of the objects
     trials.py                            `Trial`, `Outcome`, and the observations methods learn from
     loop.py                              the thin loop: ask the method for a batch, execute, record
     tracking.py                          how the run's robot follows its plans (method plan's)

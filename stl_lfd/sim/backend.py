@@ -76,6 +76,8 @@ class Backend(Protocol):
 
     def close(self) -> None: ...
 
+    def file_executions(self, folder: Path | None = None, trial: int | None = None) -> None: ...
+
     def __enter__(self) -> "Backend": ...
 
     def __exit__(self, *exception: object) -> None: ...
@@ -93,6 +95,11 @@ class BackendBase:
 
     def close(self) -> None:
         pass
+
+    def file_executions(self, folder: Path | None = None, trial: int | None = None) -> None:
+        """Where the next executions belong: the run directory `folder` and the `trial` (a
+        backend that files each execution, the command backend, keeps them; the others have
+        nothing to file)."""
 
     def __enter__(self) -> "BackendBase":
         return self

@@ -80,6 +80,13 @@ class CommandBackend(BackendBase):
         assert options.command is not None  # new_backend checks it
         return cls(options.command, options.folder)
 
+    def file_executions(self, folder: Path | None = None, trial: int | None = None) -> None:
+        """Exchange folders go under `folder` (the run directory), named by `trial`."""
+        if folder is not None:
+            self.folder = Path(folder)
+        if trial is not None:
+            self.trial = trial
+
     def run(self, reference: Reference, scene: Scene, rate: float, observer: Callable | None = None) -> Rollout:
         """Check `reference`, hand it to the command, and return the signals it recorded."""
         gate(reference, scene)

@@ -9,7 +9,7 @@ from stl_lfd.optim.methods.base import Problem
 from stl_lfd.optim.methods.composition import compose
 from stl_lfd.optim.methods.stl import CompositeSearch, PartsData
 from stl_lfd.optim.methods.trust_region import TrustRegion, trust_region_length
-from stl_lfd.optim.objective import spec_composition
+from stl_lfd.optim.placements import spec_composition
 from stl_lfd.optim.settings import Optimizer
 from stl_lfd.optim.trials import Outcome, Trial, best_trial, part_observations
 from stl_lfd.stl import Semantics, parse, split_spec

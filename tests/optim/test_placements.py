@@ -20,8 +20,7 @@ PLACEMENTS = """placements:
 
 @pytest.fixture(scope="module")
 def behaviour_models():
-    from stl_lfd.optim.inputs import resolve
-    from stl_lfd.optim.objective import task_models
+    from stl_lfd.optim.inputs import resolve, task_models
 
     return task_models(resolve(load_task(placed_task(Path(__import__("tempfile").mkdtemp())))))
 

@@ -10,7 +10,7 @@ from stl_lfd.optim.loop import run_remaining_trials, search_method
 from stl_lfd.optim.methods.base import Planner, Problem, Request
 from stl_lfd.optim.methods.planning import Plan
 from stl_lfd.optim.methods.tuning import PlanSettings
-from stl_lfd.optim.objective import spec_composition
+from stl_lfd.optim.placements import spec_composition
 from stl_lfd.optim.settings import Optimizer
 from stl_lfd.optim.trials import Outcome, best_trial
 from stl_lfd.stl import parse, split_spec
@@ -153,8 +153,8 @@ def test_plans_scored_together_are_the_plans_scored_alone_and_the_kinematic_tria
     """A batch of plans (their references retrieved together) gives exactly each point's plan
     alone, and exactly the point's trial on the kinematic backend, whose difference from the
     plan method `plan` then learns as 0."""
-    from stl_lfd.optim.inputs import resolve
-    from stl_lfd.optim.objective import objective_for, task_models
+    from stl_lfd.optim.inputs import resolve, task_models
+    from stl_lfd.optim.objective import objective_for
 
     task = load_task(small_task(tmp_path, learned_model_file))
     space, objective = objective_for(resolve(task), task_models(resolve(task)))
@@ -171,28 +171,29 @@ def test_kept_references_are_those_retrieved_anew_and_the_oldest_go_beyond_the_b
     they are exactly what a new retrieval gives; past the memory budget the oldest are dropped
     (and retrieved again when asked for)."""
     import stl_lfd.optim.objective as objectives
-    from stl_lfd.optim.inputs import resolve
+    import stl_lfd.optim.plans as plans
+    from stl_lfd.optim.inputs import resolve, task_models
 
     task = load_task(small_task(tmp_path, learned_model_file))
-    space, objective = objectives.objective_for(resolve(task), objectives.task_models(resolve(task)))
+    space, objective = objectives.objective_for(resolve(task), task_models(resolve(task)))
     points = space.lower + np.random.default_rng(1).random((4, space.dimension)) * (space.upper - space.lower)
-    kept = objective.plan_references(points, keep=True)[0]
-    fresh = objective.plan_references(points)[0]
+    kept = objective.plans.references(points, keep=True)[0]
+    fresh = objective.plans.references(points)[0]
     for a, b in zip(kept, fresh):
         assert a is not b and np.array_equal(a.times, b.times) and np.array_equal(a.positions, b.positions)
-    assert all(a is b for a, b in zip(objective.plan_references(points[::-1], keep=True)[0], kept[::-1]))
-    monkeypatch.setattr(objectives, "PLANNED_REFERENCE_BYTES", 2.5 * objectives.reference_bytes(kept[0]))
-    again = objective.plan_references(points[:1], keep=True)[0][0]  # the latest used: kept
-    assert again is kept[0] and len(objective._references) == 2  # the oldest, points 3 and 2, dropped
-    assert objective.plan_references(points[1:2], keep=True)[0][0] is kept[1]
-    assert objective.plan_references(points[3:], keep=True)[0][0] is not kept[3]  # retrieved anew
+    assert all(a is b for a, b in zip(objective.plans.references(points[::-1], keep=True)[0], kept[::-1]))
+    monkeypatch.setattr(plans, "PLANNED_REFERENCE_BYTES", 2.5 * plans.reference_bytes(kept[0]))
+    again = objective.plans.references(points[:1], keep=True)[0][0]  # the latest used: kept
+    assert again is kept[0] and len(objective.plans._references) == 2  # the oldest, points 3 and 2, dropped
+    assert objective.plans.references(points[1:2], keep=True)[0][0] is kept[1]
+    assert objective.plans.references(points[3:], keep=True)[0][0] is not kept[3]  # retrieved anew
 
 
 def test_recordings_on_other_clocks_are_scored_apart_and_as_alone(tmp_path, learned_model_file):
     """`score_all` batches the recordings that share sample times; each outcome is exactly the
     recording's own `score`."""
-    from stl_lfd.optim.inputs import resolve
-    from stl_lfd.optim.objective import objective_for, task_models
+    from stl_lfd.optim.inputs import resolve, task_models
+    from stl_lfd.optim.objective import objective_for
     from stl_lfd.signals import SignalTable
 
     task = load_task(small_task(tmp_path, learned_model_file))

@@ -12,7 +12,7 @@ from stl_lfd.optim.loop import batch_of, next_points, run_remaining_trials, sear
 from stl_lfd.optim.methods.base import Problem
 from stl_lfd.optim.methods.gp import fit_multi_output_gp
 from stl_lfd.optim.methods.posterior import PartsPosterior
-from stl_lfd.optim.objective import spec_composition
+from stl_lfd.optim.placements import spec_composition
 from stl_lfd.optim.settings import Optimizer
 from tests.optim.test_composite import BOUNDS, PARTS, conjunction_objective
 from tests.optim.test_run import small_task

@@ -25,10 +25,10 @@ from typing import Any, Callable
 import numpy as np
 
 from stl_lfd.errors import ConfigError, ExecutionError, RunError, SignalError, WaitError
-from stl_lfd.optim.inputs import TaskInputs, resolve
+from stl_lfd.optim.inputs import TaskInputs, resolve, task_models
 from stl_lfd.optim.loop import learned_from, next_points
 from stl_lfd.optim.methods.base import sobol_points
-from stl_lfd.optim.objective import SkillObjective, objective_for, task_models
+from stl_lfd.optim.objective import SkillObjective, objective_for
 from stl_lfd.optim.runs.directory import SIGNALS_DIR, RunDirectory, check_new_run_path
 from stl_lfd.optim.runs.pending import complete, handed_out, live_pending, recorded_in_turn, to_tell
 from stl_lfd.optim.runs.prepare import prepared_from

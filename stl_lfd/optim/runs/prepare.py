@@ -15,10 +15,10 @@ from stl_lfd.errors import RunError
 from stl_lfd.files import write_atomically
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim.features import path_features
-from stl_lfd.optim.inputs import TaskInputs, resolve
+from stl_lfd.optim.inputs import TaskInputs, resolve, task_models
 from stl_lfd.optim.loop import search_method
 from stl_lfd.optim.methods.base import Planner, Problem, SearchMethod
-from stl_lfd.optim.objective import SkillObjective, objective_for, task_models
+from stl_lfd.optim.objective import SkillObjective, objective_for
 from stl_lfd.optim.runs.directory import RunDirectory, check_new_run_path
 from stl_lfd.optim.runs.resume import check_resume, inputs_record
 from stl_lfd.optim.runs.staging import StagedRun

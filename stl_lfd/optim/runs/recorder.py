@@ -9,8 +9,8 @@ from typing import Any, Callable
 import numpy as np
 
 from stl_lfd.optim.loop import run_remaining_trials
-from stl_lfd.optim.objective import ObjectiveFactory
 from stl_lfd.optim.runs.prepare import PreparedRun
+from stl_lfd.optim.runs.workers import ObjectiveFactory
 from stl_lfd.optim.summary import Summary, execution_of
 from stl_lfd.optim.trials import Outcome, Trial, best_trial
 

@@ -2,7 +2,8 @@
 world, or its own executor command) for the whole run.
 
 Workers are spawned, not forked (forking after torch or pybullet started threads can
-deadlock), run single-threaded, and are given the task and models once, at start-up. Each
+deadlock), run single-threaded, and are given the task and models once, at start-up (an
+`ObjectiveFactory`, which builds the objective in the worker from the task as read here). Each
 batch of `(x, trial)` pairs is executed one pair per worker; the outcomes come back in the
 batch's order, a failure as its message.
 
@@ -26,12 +27,16 @@ import tempfile
 import threading
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
 from stl_lfd.errors import RunError
+from stl_lfd.hsmm import HSMM
+from stl_lfd.optim.inputs import TaskInputs
+from stl_lfd.optim.objective import SkillObjective, objective_for
 from stl_lfd.optim.trials import Outcome, describe_error
 from stl_lfd.spelling import spelled
 
@@ -209,3 +214,21 @@ def stop_children(grace: float = 5.0) -> None:
         if process.is_alive():
             process.kill()
             process.join()
+
+
+@dataclass(frozen=True)
+class ObjectiveFactory:
+    """Makes the objective of a task in another process (a parallel worker): picklable, so
+    that the worker builds its own world, or its own executor command, once at start-up, from
+    the task's `inputs` as read here. `run_dir`: where the command backend's exchange folders go
+    (None: a scratch folder)."""
+
+    inputs: TaskInputs
+    models: dict[str, HSMM]
+    run_dir: Path | None = None
+
+    def __call__(self) -> SkillObjective:
+        _, objective = objective_for(self.inputs, self.models)
+        if self.run_dir is not None:
+            objective.exchange_in(self.run_dir)
+        return objective
