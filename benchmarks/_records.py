@@ -32,7 +32,7 @@ def recorded_results(run: Callable[[Any], dict[str, Any]], jobs: Sequence[Any], 
     """`run(job)` for every job (in `processes` spawned processes when more than 1), each result
     with `stamp` in front appended to `out` as one JSON line as it finishes, and yielded."""
     if processes > 1:
-        from stl_lfd.optim.runs.sweep import local_map
+        from stl_lfd.optim import local_map
 
         finished = (result for _, result in local_map(run, list(jobs), processes))
     else:

@@ -35,7 +35,7 @@ def cpu_seconds(command: list[str], repeats: int = 5) -> float:
 
 def long_trace(folder: Path, samples: int = 100_000) -> Path:
     """The three-region path stretched to `samples` samples at 100 Hz, as a CSV."""
-    from stl_lfd.signals import SignalTable, read_signal_csv, write_signal_csv
+    from stl_lfd import SignalTable, read_signal_csv, write_signal_csv
 
     table = read_signal_csv(ROOT / "examples" / "three_regions.csv")
     times = np.arange(samples) / 100.0
@@ -68,8 +68,7 @@ def rows() -> list[Row]:
 
 def rtamt_phi1() -> str:
     """phi1 in RTAMT's language, regions written out as `half_width - abs(s - centre) > 0`."""
-    from stl_lfd.stl import Spec
-    from stl_lfd.stl.regions import region_boxes
+    from stl_lfd.stl import Spec, region_boxes
 
     boxes = region_boxes(Spec.load(ROOT / "specs" / "phi1.stl").tree)
 
@@ -85,7 +84,7 @@ def rtamt_row(trace: Path, ours: float, our_seconds: float) -> Row | None:
         import rtamt
     except ImportError:
         return None
-    from stl_lfd.signals import read_signal_csv
+    from stl_lfd import read_signal_csv
 
     table = read_signal_csv(trace)
     spec = rtamt.StlDiscreteTimeSpecification()

@@ -43,7 +43,7 @@ WORKLOADS = (
 TIMER = """
 import json, statistics, sys, time
 import numpy as np
-from stl_lfd.signals import read_signal_csv
+from stl_lfd import read_signal_csv
 from stl_lfd.stl import compile_spec, load_spec, parse
 
 root, workloads = sys.argv[1], json.loads(sys.argv[2])

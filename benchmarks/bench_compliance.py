@@ -23,10 +23,8 @@ from rich.table import Table
 
 from benchmarks._records import commit
 from benchmarks.bench_phi3 import insertion_and_pick
-from stl_lfd.optim import load_task
-from stl_lfd.optim.inputs import resolve, task_models
-from stl_lfd.optim.objective import objective_for
-from stl_lfd.signals import write_signal_csv
+from stl_lfd import write_signal_csv
+from stl_lfd.optim import load_task, objective_for, resolve, task_models
 from stl_lfd.sim import TrackingWarning, new_backend
 
 ROOT = Path(__file__).resolve().parent.parent

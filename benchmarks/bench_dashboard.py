@@ -67,8 +67,7 @@ def main(argv: list[str] | None = None) -> None:
     arguments = parser.parse_args(argv)
     from dash._utils import to_json  # how Dash writes a callback's response
 
-    from stl_lfd.dashboard.board import REFRESH_SECONDS, Dashboard
-    from stl_lfd.dashboard.pages import index_content, index_signature, run_outputs
+    from stl_lfd.dashboard import REFRESH_SECONDS, Dashboard, index_content, index_signature, run_outputs
 
     with tempfile.TemporaryDirectory() as scratch:
         source = one_run(Path(scratch))

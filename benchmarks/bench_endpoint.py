@@ -19,8 +19,8 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from stl_lfd import SignalTable
 from stl_lfd.hsmm import learn, load_demo_frames, load_demos, retrieve
-from stl_lfd.signals import SignalTable
 
 ROOT = Path(__file__).resolve().parent.parent
 SHAPES = ("sine", "spiral", "arc", "zigzag", "hook")

@@ -9,9 +9,8 @@ import tempfile
 from pathlib import Path
 
 from benchmarks._timing import Row, median_seconds, print_table
+from stl_lfd import QUATERNION_COLUMNS, SignalTable
 from stl_lfd.hsmm import learn, learn_from_folder, load_demos, retrieve
-from stl_lfd.rotations import QUATERNION_COLUMNS
-from stl_lfd.signals import SignalTable
 
 ROOT = Path(__file__).resolve().parent.parent
 

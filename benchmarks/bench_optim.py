@@ -25,11 +25,8 @@ from rich.console import Console
 from rich.table import Table
 
 from benchmarks._timing import Row, print_table
-from stl_lfd.optim import finish_run, load_task, start_run
-from stl_lfd.optim.methods.analytic import ProbabilityOfImprovement
-from stl_lfd.optim.methods.base import Problem, Request
-from stl_lfd.optim.runs.sweep import local_map
-from stl_lfd.optim.settings import Optimizer
+from stl_lfd.optim import Optimizer, finish_run, load_task, local_map, start_run
+from stl_lfd.optim.methods import ProbabilityOfImprovement, Problem, Request
 
 ROOT = Path(__file__).resolve().parent.parent
 # Workers are spawned, not forked: forking after torch or pybullet started threads deadlocks.

@@ -18,12 +18,10 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from stl_lfd.optim import RunDirectory, finish_run, load_task, start_run
-from stl_lfd.optim.runs.sweep import local_map
-from stl_lfd.report.figures.skills import followed_states
-from stl_lfd.signals import read_signal_csv
-from stl_lfd.stl import load_spec
-from stl_lfd.stl.regions import region_boxes
+from stl_lfd import read_signal_csv
+from stl_lfd.optim import RunDirectory, finish_run, load_task, local_map, start_run
+from stl_lfd.report import followed_states
+from stl_lfd.stl import load_spec, region_boxes
 
 ROOT = Path(__file__).resolve().parent.parent
 # Workers are spawned, not forked: forking after torch or pybullet started threads deadlocks.

@@ -25,9 +25,9 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from stl_lfd import Pose
 from stl_lfd.hsmm import learn_from_folder
-from stl_lfd.optim.runs.sweep import local_map
-from stl_lfd.poses import Pose
+from stl_lfd.optim import local_map
 from stl_lfd.sim import TrackingWarning, execute, load_scene
 from stl_lfd.skill import build_reference, load_behaviour
 

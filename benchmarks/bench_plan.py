@@ -45,9 +45,7 @@ UNTIL_TARGET = 1.0  # seconds: until_l4's plan proposal
 def plans_per_second(count: int) -> tuple[float, float]:
     """Plans per second of phi1's objective (kinematic), `count` points scored in one batch and
     `count` other points one at a time (after a warm-up of both)."""
-    from stl_lfd.optim import load_task
-    from stl_lfd.optim.inputs import resolve, task_models
-    from stl_lfd.optim.objective import objective_for
+    from stl_lfd.optim import load_task, objective_for, resolve, task_models
 
     task = load_task(RUNS["phi1"][0]).with_overrides(backend="kinematic")
     space, objective = objective_for(resolve(task), task_models(resolve(task)))

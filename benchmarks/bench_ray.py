@@ -42,10 +42,7 @@ def start_up_seconds(task, workers: int) -> float:
     worker processes build their PyBullet worlds (and import stlopt, in a new process)."""
     import numpy as np
 
-    from stl_lfd.optim import build_search_space
-    from stl_lfd.optim.inputs import resolve, task_models
-    from stl_lfd.optim.runs.ray_workers import RayPool
-    from stl_lfd.optim.runs.workers import ObjectiveFactory
+    from stl_lfd.optim import ObjectiveFactory, RayPool, build_search_space, resolve, task_models
 
     models = task_models(resolve(task))
     x = np.asarray(build_search_space(models, task.parameters, task.source).bounds, dtype=float).mean(axis=0)

@@ -23,8 +23,8 @@ import numpy as np
 
 from benchmarks._timing import Row, print_table
 from benchmarks.physical import inserted
+from stl_lfd import Pose
 from stl_lfd.hsmm import load_demo_frames, load_demos
-from stl_lfd.poses import Pose
 from stl_lfd.skill import PlacedSkill, placed_scene
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -13,9 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks._timing import Row, format_seconds, median_seconds, paired_median_seconds, print_table
-from stl_lfd.stl import HorizonWarning, compile_spec, load_spec, parse
-from stl_lfd.stl.evaluate import evaluate_file
-from stl_lfd.stl.parser import MAX_DEPTH
+from stl_lfd.stl import MAX_DEPTH, HorizonWarning, compile_spec, evaluate_file, load_spec, parse
 
 ROOT = Path(__file__).resolve().parent.parent
 RATE_HZ = 240
@@ -23,7 +21,7 @@ RATE_HZ = 240
 
 def three_region_trace(samples: int = 20 * RATE_HZ) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """A smooth path through the free-space regions, as a rollout would record it."""
-    from stl_lfd.signals import read_signal_csv
+    from stl_lfd import read_signal_csv
 
     table = read_signal_csv(ROOT / "examples" / "three_regions.csv")
     times = np.arange(samples) / RATE_HZ
@@ -97,7 +95,7 @@ def ratio_row(case: str, text: str, signals: dict[str, np.ndarray], times: np.nd
 def until_rows() -> list[Row]:
     """Until under the new robustness against the classic one, on the same 22 s trace at 100 Hz,
     both timed in this run: the time column is the new robustness, the target 20x the classic."""
-    from stl_lfd.signals import read_signal_csv
+    from stl_lfd import read_signal_csv
 
     table = read_signal_csv(ROOT / "examples" / "three_regions.csv")
     times = np.arange(2200) / 100

@@ -36,9 +36,8 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from stl_lfd.optim.runs.sweep import local_map
-from stl_lfd.sim.backend import Capabilities
-from stl_lfd.sim.kinematic import KinematicBackend
+from stl_lfd.optim import local_map
+from stl_lfd.sim import Capabilities, KinematicBackend
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS_DIR = ROOT / "benchmarks" / "problems"
@@ -94,8 +93,8 @@ class LaggingBackend(KinematicBackend):
     def run(self, reference, scene, rate, observer=None):
         from scipy.signal import lfilter
 
-        from stl_lfd.signals import SignalTable
-        from stl_lfd.sim.reference import Rollout
+        from stl_lfd import SignalTable
+        from stl_lfd.sim import Rollout
 
         rollout = super().run(reference, scene, rate, observer)
         times, columns = rollout.signals.times, dict(rollout.signals.columns)
@@ -108,34 +107,26 @@ class LaggingBackend(KinematicBackend):
         return Rollout(SignalTable(times, columns, source="lagging kinematic rollout"), np.linalg.norm(reached - sent, axis=1))
 
 
-@contextlib.contextmanager
-def executed_as(problem: str):
-    """Within it, the tasks of `problem` execute on its backend in place of the kinematic one
-    (`+lag`: `LaggingBackend`; `+VARIANT`: that robot of `benchmarks.robots.VARIANTS`)."""
-    import stl_lfd.optim.objective as run
+def executed_as(problem: str, task):
+    """`task` executing on the backend of `problem` in place of the kinematic one (`+lag`:
+    `LaggingBackend`; `+VARIANT`: that robot of `benchmarks.robots.VARIANTS`), registered under
+    the name `kinematic+VARIANT` (`stl_lfd.sim.register`, in this process)."""
     from benchmarks.robots import VARIANTS
+    from stl_lfd.sim import register
 
     variant = problem.partition("+")[2]
-    if not variant:
-        yield
-        return
+    if not variant or task.backend != "kinematic":
+        return task
     robot = LaggingBackend() if variant == "lag" else VARIANTS[variant]
-    original = run.new_backend
-
-    def imperfect(name, options=None):
-        return robot if name == "kinematic" else original(name, options)
-
-    run.new_backend = imperfect
-    try:
-        yield
-    finally:
-        run.new_backend = original
+    name = f"kinematic+{variant}"
+    register(name, type(f"{type(robot).__name__}Backend", (type(robot),), {"open": classmethod(lambda cls, options: robot)}), variant)
+    return task.with_overrides(backend=name)
 
 
 @contextlib.contextmanager
 def untracked():
     """Within it, method plan scores the plan as it stands, whatever executes it."""
-    from stl_lfd.optim.objective import SkillObjective
+    from stl_lfd.optim import SkillObjective
 
     original = SkillObjective.plays_the_plan
     SkillObjective.plays_the_plan = property(lambda self: True)
@@ -152,13 +143,13 @@ def run_one(problem: str, method: str, seed: int) -> dict:
     from stl_lfd.optim import load_task
 
     task = _with_learned_model(load_task(task_file(problem)), problem.partition("+")[0])
-    with executed_as(problem):
-        if method == "tpe":
-            trials, initial = _run_tpe(task, seed)
-        else:
-            name, initial_trials = method_and_initial(method)
-            with untracked() if name == "plan-untracked" else contextlib.nullcontext():
-                trials, initial = _run_tool(task.with_overrides(method=name.removesuffix("-untracked"), seed=seed, initial=initial_trials))
+    executed = executed_as(problem, task)
+    if method == "tpe":
+        trials, initial = _run_tpe(executed, seed)
+    else:
+        name, initial_trials = method_and_initial(method)
+        with untracked() if name == "plan-untracked" else contextlib.nullcontext():
+            trials, initial = _run_tool(executed.with_overrides(method=name.removesuffix("-untracked"), seed=seed, initial=initial_trials))
     best_x = max((trial for trial in trials if trial["robustness"] is not None), key=lambda trial: trial["robustness"], default={}).get("x")
     robustness = [trial["robustness"] for trial in trials]
     satisfied = [trial["trial"] for trial in trials if trial["robustness"] is not None and trial["robustness"] > 0]
@@ -257,8 +248,7 @@ def _run_tool(task) -> tuple[list[dict], float]:
 def _run_tpe(task, seed: int) -> tuple[list[dict], float]:
     import optuna
 
-    from stl_lfd.optim.inputs import resolve, task_models
-    from stl_lfd.optim.objective import objective_for
+    from stl_lfd.optim import objective_for, resolve, task_models
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     models = task_models(resolve(task))
@@ -300,14 +290,11 @@ def random_search(problem: str, points: int, seed: int = 12345, held: dict[int, 
     `held` fixes unit coordinates (index -> value in [0, 1]) in every point: a search directed
     to where the problem's structure says the solutions are (recorded as `directed`)."""
     warnings.simplefilter("ignore")
-    from stl_lfd.optim import load_task
-    from stl_lfd.optim.inputs import resolve, task_models
-    from stl_lfd.optim.objective import objective_for
+    from stl_lfd.optim import load_task, objective_for, resolve, task_models
 
-    task = load_task(task_file(problem))
-    models = task_models(resolve(task))
-    with executed_as(problem):
-        space, objective = objective_for(resolve(task), models)
+    task = executed_as(problem, load_task(task_file(problem)))
+    inputs = resolve(task)
+    space, objective = objective_for(inputs, task_models(inputs))
     held = held or {}
     if any(not 0 <= index < space.dimension for index in held):
         raise HeldIndexError(f"{problem}: --hold indices must be in 0..{space.dimension - 1}")

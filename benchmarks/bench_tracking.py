@@ -24,10 +24,8 @@ from torch.quasirandom import SobolEngine
 
 from benchmarks.bench_suite import ROOT, LaggingBackend
 from benchmarks.robots import VARIANTS
-from stl_lfd.optim import load_task
-from stl_lfd.optim.inputs import resolve, task_models
-from stl_lfd.optim.objective import objective_for
-from stl_lfd.sim.tracking import Execution, TrackingModel
+from stl_lfd.optim import load_task, objective_for, resolve, task_models
+from stl_lfd.sim import Execution, TrackingModel
 
 PYBULLET_TARGET = 0.001  # m
 ROBOT_RATIO_TARGET = 0.2

@@ -38,9 +38,7 @@ def one_transfer(job: tuple[str, str, str, int]) -> dict[str, Any]:
     """Optimise `task_name` on `source` with `seed`, then execute its best trial on `target`."""
     task_name, source, target, seed = job
     warnings.simplefilter("ignore")
-    from stl_lfd.optim import finish_run, load_task, start_run, trial_skill
-    from stl_lfd.optim.inputs import resolve
-    from stl_lfd.optim.objective import objective_for
+    from stl_lfd.optim import finish_run, load_task, objective_for, resolve, start_run, trial_skill
 
     task = load_task(ROOT / "configs" / f"{task_name}.yaml").with_overrides(seed=seed, backend=source)
     start = time.perf_counter()

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from stl_lfd.poses import Pose
+from stl_lfd import Pose
 
 # The scenes' table: a box centred at (0.5, 0, 0.01) with half extents (0.25, 0.45, 0.01).
 TABLE_TOP, TABLE_X, TABLE_Y = 0.02, (0.25, 0.75), (-0.45, 0.45)

@@ -13,10 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stl_lfd.signals import SignalTable
-from stl_lfd.sim.backend import Capabilities
-from stl_lfd.sim.kinematic import KinematicBackend
-from stl_lfd.sim.reference import Rollout
+from stl_lfd import SignalTable
+from stl_lfd.sim import Capabilities, KinematicBackend, Rollout
 
 SUBSTEPS = 10  # servo steps per recorded sample
 

@@ -51,6 +51,8 @@ _HOMES = {
     "Execution": "stl_lfd.sim.tracking",
     "GraspModel": "stl_lfd.sim.grasp",
     "read_tracking": "stl_lfd.optim.tracking",
+    "QUATERNION_COLUMNS": "stl_lfd.rotations",
+    "keep_freed_memory": "stl_lfd.allocator",
 }
 
 __all__, __getattr__, __dir__ = lazy_exports("stl_lfd", _HOMES, globals())

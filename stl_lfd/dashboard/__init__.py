@@ -10,3 +10,16 @@
 - `app`: the Dash application (pages for the folder, a run and a sweep, refreshed every half
   second) and `serve`.
 """
+
+from stl_lfd.lazy import lazy_exports
+
+_HOMES = {
+    "Dashboard": "stl_lfd.dashboard.board",
+    "REFRESH_SECONDS": "stl_lfd.dashboard.board",
+    "index_content": "stl_lfd.dashboard.pages",
+    "index_signature": "stl_lfd.dashboard.pages",
+    "run_outputs": "stl_lfd.dashboard.pages",
+    "create_app": "stl_lfd.dashboard.app",
+    "serve": "stl_lfd.dashboard.app",
+}
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _HOMES, globals())

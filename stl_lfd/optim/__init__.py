@@ -46,6 +46,15 @@ _HOMES = {
     "load_task": "stl_lfd.optim.task",
     "optimize": "stl_lfd.optim.api",
     "Result": "stl_lfd.optim.api",
+    "TaskInputs": "stl_lfd.optim.inputs",
+    "resolve": "stl_lfd.optim.inputs",
+    "spec_parts": "stl_lfd.optim.inputs",
+    "task_models": "stl_lfd.optim.inputs",
+    "SkillObjective": "stl_lfd.optim.objective",
+    "objective_for": "stl_lfd.optim.objective",
+    "ObjectiveFactory": "stl_lfd.optim.runs.workers",
+    "RayPool": "stl_lfd.optim.runs.ray_workers",
+    "local_map": "stl_lfd.optim.runs.sweep",
 }
 
 __all__, __getattr__, __dir__ = lazy_exports("stl_lfd.optim", _HOMES, globals())

@@ -8,8 +8,13 @@ from pathlib import Path
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.files import atomic_output, check_output_folder
+from stl_lfd.lazy import lazy_exports
 from stl_lfd.optim.runs.directory import RunDirectory
 from stl_lfd.spelling import spelled
+
+_HOMES = {"followed_states": "stl_lfd.report.figures.skills", "load_run": "stl_lfd.report.run_data"}
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _HOMES, globals())
+__all__ += ["write_report"]
 
 
 def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (), gp_parameters: list[str] | None = None) -> tuple[Path, list[Path]]:

@@ -57,6 +57,9 @@ _HOMES = {
     "UnsafeReference": "stl_lfd.sim.safety",
     "check_reference": "stl_lfd.sim.safety",
     "Scene": "stl_lfd.sim.scene",
+    "KinematicBackend": "stl_lfd.sim.kinematic",
+    "Execution": "stl_lfd.sim.tracking",
+    "TrackingModel": "stl_lfd.sim.tracking",
     "builtin_scenes": "stl_lfd.sim.scene_file",
     "load_scene": "stl_lfd.sim.scene_file",
 }

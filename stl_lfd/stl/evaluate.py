@@ -9,8 +9,9 @@ from pathlib import Path
 from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.errors import SignalError, SpecError
 from stl_lfd.signals import SignalTable, read_signal_csv
-from stl_lfd.stl import ast, compile_spec, load_spec
-from stl_lfd.stl.parser import source_text
+from stl_lfd.stl import ast
+from stl_lfd.stl.parser import load_spec, source_text
+from stl_lfd.stl.robustness import compile_spec
 
 
 @dataclass(frozen=True)

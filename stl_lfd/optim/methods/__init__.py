@@ -18,6 +18,14 @@ the methods, as the command line and the settings' checks do, loads no torch (no
 package, which the settings would otherwise import back).
 """
 
+from stl_lfd.lazy import lazy_exports
 from stl_lfd.optim.method_registry import REGISTRY, SETTINGS, method_class, method_names, register, settings_class
 
-__all__ = ["REGISTRY", "SETTINGS", "method_class", "method_names", "register", "settings_class"]
+_HOMES = {
+    "Problem": "stl_lfd.optim.methods.base",
+    "Request": "stl_lfd.optim.methods.base",
+    "SearchMethod": "stl_lfd.optim.methods.base",
+    "ProbabilityOfImprovement": "stl_lfd.optim.methods.analytic",
+}
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _HOMES, globals())
+__all__ += ["REGISTRY", "SETTINGS", "method_class", "method_names", "register", "settings_class"]
