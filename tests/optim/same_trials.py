@@ -51,17 +51,17 @@ CASES = [
 
 
 def run_case(task_file: str, overrides: dict) -> list[dict]:
-    """The trials (phase, point, robustness) of the task file's run with `overrides`."""
-    import contextlib
-
+    """The trials (phase, point, robustness) of the task file's run with `overrides` (`lag`: on
+    the suite's lagging robot)."""
     from benchmarks.bench_suite import executed_as
     from stl_lfd.optim import finish_run, load_task, start_run
 
     overrides = dict(overrides)
     lag = overrides.pop("lag", False)
     task = load_task(ROOT / task_file).with_overrides(**overrides)
+    task = executed_as("x+lag", task) if lag else task
     warnings.simplefilter("ignore")
-    with tempfile.TemporaryDirectory() as folder, executed_as("x+lag") if lag else contextlib.nullcontext():
+    with tempfile.TemporaryDirectory() as folder:
         with start_run(task, Path(folder) / "run") as prepared:
             finish_run(prepared)
         lines = (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()
