@@ -169,11 +169,11 @@ def random_trace_rows() -> list[Row]:
 def reference_difference(text: str, signals: dict[str, np.ndarray], times: np.ndarray) -> float:
     """The new robustness's relative difference from the reference implementation's, on the
     trace's first REFERENCE_SAMPLES samples (the reference evaluates one sample at a time)."""
-    from stl_lfd.stl import reference
+    from stl_lfd.stl import definitions
 
     spec = parse(text)
     prefix, short = {name: values[:REFERENCE_SAMPLES] for name, values in signals.items()}, times[:REFERENCE_SAMPLES]
-    expected = reference.new(spec.formula, prefix, short, 0, 1.0)
+    expected = definitions.new(spec.formula, prefix, short, 0, 1.0)
     with warnings.catch_warnings():  # the prefix is shorter than the formula's windows: clipped, as the reference clips them
         warnings.simplefilter("ignore", HorizonWarning)
         actual = compile_spec(spec, "new")(prefix, short)

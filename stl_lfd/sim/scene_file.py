@@ -71,8 +71,9 @@ def builtin_scenes() -> list[str]:
 def scene_reference(text: str, source: Path, kind: str) -> str:
     """A scene as the `kind` file `source` (a task or behaviour file) names it: a built-in
     scene's name as it is, or a scene file's absolute path, `text` read relative to `source`'s
-    folder (older versions read it from the working directory, which is still accepted when
-    only that exists). ConfigError naming `source` when the file does not exist."""
+    folder, or else, when only that exists, relative to the working directory (as task files
+    written for it still name their scenes). ConfigError naming `source` when the file does not
+    exist."""
     if not (text.endswith((".yaml", ".yml")) or "/" in text):
         return text
     resolved = Path(text) if Path(text).is_absolute() else source.parent / text
@@ -209,7 +210,8 @@ CONTROL_MAXIMA = {
     "finger_force": 140.0,
 }
 CONTROL_KEYS = (*CONTROL_MAXIMA, "torque_limits", "nullspace_posture")
-# Keys of the position-controlled arm that impedance control replaced, and what replaces them.
+# Keys a scene file may hold for a position-controlled arm, which the compliant arm does not
+# take: each is refused with the settings to give instead.
 RETIRED_CONTROL_KEYS = {"position_gain": "translational_stiffness and rotational_stiffness", "arm_forces": "torque_limits"}
 
 

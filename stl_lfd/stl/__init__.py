@@ -1,6 +1,6 @@
 """STL specifications: parsing (`parse`, `load_spec`) and robustness (`compile_spec`), and the parts of
 a conjunction (`split_spec`); a signal file's robustness (`evaluate_file`), a spec's regions
-as boxes (`region_boxes`), and the semantics' plain definitions (`reference`)."""
+as boxes (`region_boxes`), and the semantics' plain definitions (`definitions`)."""
 
 from stl_lfd.choices import SEMANTICS
 from stl_lfd.stl.components import SpecParts, split_spec
@@ -21,13 +21,13 @@ __all__ = [
     "Robustness",
     "Semantics",
     "compile_spec",
+    "definitions",  # the module: the semantics' plain definitions, sample by sample
     "evaluate_file",
     "format_formula",
     "format_spec",
     "horizon",
     "load_spec",
     "parse",
-    "reference",  # the module: the semantics' plain definitions, sample by sample
     "region_boxes",
     "resolve",
     "split_spec",

@@ -1,4 +1,4 @@
-"""Property-based tests of the compiled robustness against the plain evaluators of reference.py."""
+"""Property-based tests of the compiled robustness against the plain evaluators of definitions.py."""
 
 import math
 
@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from stl_lfd.stl import compile_spec, format_formula, parse, reference
+from stl_lfd.stl import compile_spec, definitions, format_formula, parse
 from tests.stl.strategies import formulas, traces
 
 pytestmark = pytest.mark.filterwarnings("ignore::stl_lfd.stl.robustness.HorizonWarning")
@@ -24,7 +24,7 @@ def close(a: float, b: float, tolerance: float = 1e-9) -> bool:
 def test_classic_equals_reference_at_every_sample(formula, trace):
     signals, times = trace
     compiled = compile_spec(formula, "classic").trace(signals, times)
-    expected = [reference.classic(formula, signals, times, k) for k in range(times.size)]
+    expected = [definitions.classic(formula, signals, times, k) for k in range(times.size)]
     assert all(close(a, b) for a, b in zip(compiled, expected)), (format_formula(formula), compiled, expected)
 
 
@@ -32,7 +32,7 @@ def test_classic_equals_reference_at_every_sample(formula, trace):
 def test_new_equals_reference_at_first_sample(formula, trace, nu):
     signals, times = trace
     compiled = compile_spec(formula, "new", nu)(signals, times)
-    expected = reference.new(formula, signals, times, 0, nu)
+    expected = definitions.new(formula, signals, times, 0, nu)
     assert close(compiled, expected, 1e-7), (format_formula(formula), compiled, expected)
 
 
@@ -43,7 +43,7 @@ def test_sign_agrees_with_boolean_semantics(formula, trace, semantics):
     assert not np.any(np.isnan(values))
     for k, value in enumerate(values):
         if value != 0:
-            assert (value > 0) == reference.boolean(formula, signals, times, k), (format_formula(formula), k, value)
+            assert (value > 0) == definitions.boolean(formula, signals, times, k), (format_formula(formula), k, value)
 
 
 @given(formulas, traces())

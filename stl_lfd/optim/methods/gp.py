@@ -16,9 +16,9 @@ import numpy as np
 
 from stl_lfd.optim.methods.likelihood import Hyperparameters, LogNormal, maximise_likelihood, squared_differences
 
-# L-BFGS-B iterations of the GP hyperparameter fit (per output): 100 reached a marginal log
-# likelihood within 0.001 of the converged one at n = 30, d = 21 (measured with gpytorch's fit,
-# which the numpy likelihood replaced; the objective is the same).
+# L-BFGS-B iterations of the GP hyperparameter fit (per output): 100 reach a marginal log
+# likelihood within 0.001 of the converged one at n = 30, d = 21 (measured with gpytorch's fit
+# of the same likelihood).
 FIT_ITERATIONS = 100
 
 

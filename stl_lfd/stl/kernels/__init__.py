@@ -14,7 +14,7 @@ one module per operator, vectorised over any leading axes.
 All functions take and return float arrays; reductions run along the last axis. Infinite
 operands stand for empty windows: +inf is the identity of a conjunction, -inf of a
 disjunction. Every kernel is tested against the brute-force definitions of
-`stl_lfd.stl.reference`.
+`stl_lfd.stl.definitions`.
 """
 
 from stl_lfd.stl.kernels.conjunction import classic_conjunction, new_conjunction, new_conjunction_of, new_disjunction
