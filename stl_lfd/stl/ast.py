@@ -173,6 +173,14 @@ class Compare(Formula):
     def children(self) -> tuple[Node, ...]:
         return (self.left, self.right)
 
+    def signal_versus_number(self) -> tuple[str, float, bool] | None:
+        """(signal, number, whether the signal is on the left) of `x > 1` or `1 < x`, else None."""
+        if type(self.left) is Signal and type(self.right) is Const:
+            return self.left.name, self.right.value, True
+        if type(self.left) is Const and type(self.right) is Signal:
+            return self.right.name, self.left.value, False
+        return None
+
 
 @dataclass(frozen=True)
 class InRange(Formula):

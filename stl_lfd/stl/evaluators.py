@@ -122,14 +122,7 @@ def _parts(node: ast.Node) -> tuple[ast.Node, ...]:
 
 
 def _signal_versus_number(node: ast.Node) -> tuple[str, float, bool] | None:
-    """(signal, number, signal on the left) of `x > 1` or `1 < x`, else None."""
-    if type(node) is ast.Compare:
-        left, right = node.left, node.right
-        if type(left) is ast.Signal and type(right) is ast.Const:
-            return left.name, right.value, True
-        if type(left) is ast.Const and type(right) is ast.Signal:
-            return right.name, left.value, False
-    return None
+    return node.signal_versus_number() if type(node) is ast.Compare else None
 
 
 def _computed_once(evaluate: Evaluator) -> Evaluator:

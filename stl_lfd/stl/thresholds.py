@@ -43,10 +43,8 @@ def signal_thresholds(spec: ast.Spec) -> dict[str, list[Threshold]]:
 
 
 def _threshold(node: ast.Node) -> Threshold | None:
-    if not isinstance(node, ast.Compare):
+    found = node.signal_versus_number() if isinstance(node, ast.Compare) else None
+    if found is None:
         return None
-    if isinstance(node.left, ast.Signal) and isinstance(node.right, ast.Const):
-        return Threshold(node.left.name, node.op.value, node.right.value)
-    if isinstance(node.right, ast.Signal) and isinstance(node.left, ast.Const):
-        return Threshold(node.right.name, FLIPPED[node.op.value], node.left.value)
-    return None
+    signal, value, on_the_left = found
+    return Threshold(signal, node.op.value if on_the_left else FLIPPED[node.op.value], value)
