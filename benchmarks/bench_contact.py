@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks._records import commit, recorded_results, seed_list
-from benchmarks.physical import end_offset, flung, holder_pose, shaft_end
+from benchmarks.physical import end_offset, flung, holder_pose, scene_geometry, shaft_end
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "contact.jsonl"
@@ -53,7 +53,7 @@ def one_run(job: tuple[str, str, int, int, str]) -> dict[str, Any]:
         ends, thrown_up, offsets = [], [], []
         for number in range(len(robustness)):
             signals = run.recorded_signals(number)
-            ends.append("failed" if signals is None else shaft_end(signals, holder))
+            ends.append("failed" if signals is None else shaft_end(signals, holder, scene_geometry(task.scene)))
             thrown_up.append(signals is not None and flung(signals))
             offsets.append(end_offset(signals) if signals is not None else float("nan"))
     satisfied = [value is not None and value > 0 for value in robustness]

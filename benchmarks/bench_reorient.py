@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks._timing import Row, print_table
-from benchmarks.physical import inserted
+from benchmarks.physical import inserted, scene_geometry
 from stl_lfd import Pose
 from stl_lfd.hsmm import load_demo_frames, load_demos
 from stl_lfd.skill import PlacedSkill, placed_scene
@@ -67,7 +67,7 @@ def main(argv: list[str] | None = None) -> None:
     for index, placement in enumerate(placements(arguments.placements, arguments.seed, any_yaw=not arguments.demonstrated_yaws), start=1):
         try:
             placed = PlacedSkill(skill.models, skill.behaviour, placed_scene(skill.scene, placement), 36.0)
-            ok, how = inserted(placed.execute(arguments.backend, 100).signals, placement["holder"])
+            ok, how = inserted(placed.execute(arguments.backend, 100).signals, placement["holder"], scene_geometry(skill.behaviour.scene))
         except Exception as error:  # a failed grasp, say: the placement fails
             ok, how = False, str(error)[:60]
         successes += ok

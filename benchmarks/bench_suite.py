@@ -231,7 +231,7 @@ def _run_tool(task) -> tuple[list[dict], float]:
     None where there is none) and the unoptimised skill's robustness."""
     import tempfile
 
-    from benchmarks.physical import holder_pose, is_contact_task, physically_inserted
+    from benchmarks.physical import holder_pose, is_contact_task, physically_inserted, scene_geometry
     from stl_lfd.optim import RunDirectory, finish_run, start_run
 
     with tempfile.TemporaryDirectory() as folder:
@@ -241,7 +241,7 @@ def _run_tool(task) -> tuple[list[dict], float]:
         contact, run = is_contact_task(task), RunDirectory(Path(folder) / "run")
         for trial in trials:
             signals = run.recorded_signals(trial["trial"]) if contact else None
-            trial["inserted"] = None if signals is None else physically_inserted(signals, holder_pose(task))
+            trial["inserted"] = None if signals is None else physically_inserted(signals, holder_pose(task), scene_geometry(task.scene))
         return trials, prepared.summary.initial_robustness
 
 

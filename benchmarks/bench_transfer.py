@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks._records import commit, recorded_results, seed_list
-from benchmarks.physical import flung, holder_pose, shaft_end
+from benchmarks.physical import flung, holder_pose, scene_geometry, shaft_end
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "transfer.jsonl"
@@ -58,7 +58,7 @@ def one_transfer(job: tuple[str, str, str, int]) -> dict[str, Any]:
     result["target_robustness"] = outcome.robustness
     signals = outcome.payload
     if signals is not None and "shaft_x" in signals.columns:
-        result["target_physically_inserted"] = shaft_end(signals, holder_pose(task)) == "inserted" and not flung(signals)
+        result["target_physically_inserted"] = shaft_end(signals, holder_pose(task), scene_geometry(task.scene)) == "inserted" and not flung(signals)
     return result | {"wall_seconds": round(time.perf_counter() - start, 1)}
 
 

@@ -3,11 +3,12 @@
 import numpy as np
 import pytest
 
-from benchmarks.physical import end_offset, flung, physically_inserted, shaft_end
+from benchmarks.physical import end_offset, flung, physically_inserted, scene_geometry, shaft_end
 from stl_lfd.poses import Pose
 from stl_lfd.signals import SignalTable
 
 HOLDER = Pose((0.55, 0.20, 0.04), 0.3)
+GEOMETRY = scene_geometry("pick_insert")
 
 
 def recording(end, tilt=0.0, jump=False):
@@ -35,12 +36,19 @@ def recording(end, tilt=0.0, jump=False):
 )
 def test_where_the_shaft_ends(end, tilt, jump, where, inside):
     signals = recording(end, tilt, jump)
-    assert shaft_end(signals, HOLDER) == where
+    assert shaft_end(signals, HOLDER, GEOMETRY) == where
     assert flung(signals) == jump
-    assert physically_inserted(signals, HOLDER) == inside
+    assert physically_inserted(signals, HOLDER, GEOMETRY) == inside
 
 
 def test_a_shaft_in_a_corner_of_the_hole_is_inserted_beyond_the_specs_offset():
     corner = HOLDER.to_base(np.array([[0.0055, 0.0055, 0.04]]))[0]  # 5.5 mm off the axis in both of the holder's axes
     signals = recording(corner)
-    assert physically_inserted(signals, HOLDER) and end_offset(signals) == pytest.approx(0.0055 * np.sqrt(2), abs=1e-9)
+    assert physically_inserted(signals, HOLDER, GEOMETRY) and end_offset(signals) == pytest.approx(0.0055 * np.sqrt(2), abs=1e-9)
+
+
+def test_the_geometry_is_read_from_the_scene_files():
+    for scene in ("pick_insert", "pick_reorient_insert"):
+        geometry = scene_geometry(scene)
+        assert (geometry.table_top, geometry.table_x, geometry.table_y) == (0.02, (0.25, 0.75), (-0.45, 0.45))
+        assert (geometry.shaft_half_length, geometry.holder_height, geometry.clearance) == (0.06, 0.02, 0.006)  # a 32 mm hole, a 20 mm shaft

@@ -75,7 +75,7 @@ def test_holding_the_arms_own_posture_keeps_it_out_of_a_joint_limit():
     import dataclasses
 
     from benchmarks.bench_reorient import placements
-    from benchmarks.physical import inserted
+    from benchmarks.physical import inserted, scene_geometry
     from stl_lfd.skill import placed_scene
 
     skill = PlacedSkill.load(ROOT / "configs" / "behaviours" / "pick_reorient_insert.yaml", duration=36.0)
@@ -86,6 +86,6 @@ def test_holding_the_arms_own_posture_keeps_it_out_of_a_joint_limit():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", TrackingWarning)  # the rest posture's, as intended
             rollout = PlacedSkill(skill.models, skill.behaviour, placed_scene(scene, placement), 36.0).execute("pybullet", 100)
-        ends[posture] = (inserted(rollout.signals, placement["holder"])[0], float(rollout.tracking_error.max()))
+        ends[posture] = (inserted(rollout.signals, placement["holder"], scene_geometry(skill.behaviour.scene))[0], float(rollout.tracking_error.max()))
     assert ends["rest"][0] is False and ends["rest"][1] > 0.03
     assert ends["current"][0] is True and ends["current"][1] < 0.002
