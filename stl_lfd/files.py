@@ -90,12 +90,13 @@ def read_bounded(path: Path | str, what: str, max_bytes: int) -> bytes:
     """The bytes of the regular file at `path`, refused when over `max_bytes` (UnreadableFile);
     OSError when it cannot be opened."""
     descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)  # a FIFO opens without waiting for a writer
-    with os.fdopen(descriptor, "rb") as stream:
-        status = os.fstat(descriptor)
-        if stat.S_ISDIR(status.st_mode):
+    mode = os.fstat(descriptor).st_mode
+    if not stat.S_ISREG(mode):
+        os.close(descriptor)
+        if stat.S_ISDIR(mode):
             raise IsADirectoryError(path)
-        if not stat.S_ISREG(status.st_mode):
-            raise UnreadableFile(f"not a regular file (a pipe, device or socket); expected a {what}")
+        raise UnreadableFile(f"not a regular file (a pipe, device or socket); expected a {what}")
+    with os.fdopen(descriptor, "rb") as stream:
         data = stream.read(max_bytes + 1)
     if len(data) > max_bytes:
         raise UnreadableFile(f"the file is larger than {_size(max_bytes)}; is it the right {what}?")

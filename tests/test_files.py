@@ -64,3 +64,12 @@ def test_a_staging_folder_a_killed_run_left_is_removed_by_a_rerun_even_after_the
     with pytest.raises(RunError, match="the run directory exists"):
         StagedRun(run)
     assert not left.exists()
+
+
+def test_refusing_a_folder_or_a_device_leaves_no_file_open(tmp_path):
+    open_before = len(os.listdir("/proc/self/fd"))
+    for _ in range(20):
+        for path in (tmp_path, "/dev/zero"):
+            with pytest.raises(UnreadableFile):
+                read_text(path, "task file")
+    assert len(os.listdir("/proc/self/fd")) == open_before

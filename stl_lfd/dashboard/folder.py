@@ -320,11 +320,10 @@ def open_regular(path: Path) -> BinaryIO:
     is anything else (a folder, a FIFO whose read would block, a device), FileNotFoundError
     when it is not there."""
     descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
-    stream = os.fdopen(descriptor, "rb")
     if not stat.S_ISREG(os.fstat(descriptor).st_mode):
-        stream.close()
+        os.close(descriptor)
         raise ValueError(f"{path.name}: not a regular file")
-    return stream
+    return os.fdopen(descriptor, "rb")
 
 
 def _text(path: Path) -> str:
