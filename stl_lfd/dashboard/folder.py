@@ -202,7 +202,7 @@ class RunView:
                 self._append_lines(complete[:cut])
 
     def _append_lines(self, data: bytes) -> None:
-        for line in data.splitlines():
+        for line in data.split(b"\n")[:-1]:  # data ends with a newline; offsets count exactly the bytes read
             number = len(self.trials) + 1
             if len(line) > MAX_LINE_BYTES:
                 raise ValueError(f"{TRIALS_FILE} line {number}: longer than {MAX_LINE_BYTES // 1_000_000} MB, not a trial record")
