@@ -142,14 +142,26 @@ def atomic_output(path: Path | str) -> Iterator[Path]:
         raise
 
 
+_TIDIED: set[tuple[Path, str]] = set()  # (folder, suffix) whose leftovers this process removed
+
+
 def remove_leftovers(path: Path) -> None:
-    """Remove the temporary files of `path` that a killed process left (`atomic_output` names
-    them `.STEM.PID.XXXXXXXX.tmpSUFFIX`): those whose process no longer runs."""
-    pattern = re.compile(rf"\.{re.escape(path.stem)}\.(\d+)\.[A-Za-z0-9_]{{8}}\.tmp{re.escape(path.suffix)}")
-    for leftover in path.parent.glob(f".{glob.escape(path.stem)}.*.tmp{glob.escape(path.suffix)}"):
+    """Remove the temporary files that killed processes left beside `path` (`atomic_output`
+    names them `.STEM.PID.XXXXXXXX.tmpSUFFIX`): those of this suffix whose process no longer
+    runs on this machine. Once per folder and suffix per process: a run writes thousands of
+    files into one folder."""
+    key = (path.parent.resolve(), path.suffix)
+    if key in _TIDIED:
+        return
+    _TIDIED.add(key)
+    pattern = re.compile(rf"\..+\.(\d+)\.[A-Za-z0-9_]{{8}}\.tmp{re.escape(path.suffix)}")
+    for leftover in path.parent.glob(f".*.tmp{glob.escape(path.suffix)}"):
         match = pattern.fullmatch(leftover.name)
         if match and not _running(int(match.group(1))):
-            leftover.unlink(missing_ok=True)
+            try:
+                leftover.unlink()
+            except OSError:  # gone already, or not ours to remove
+                pass
 
 
 def _running(pid: int) -> bool:

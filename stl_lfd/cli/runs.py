@@ -98,7 +98,7 @@ def optimize(
         if ray is not None:
             from stl_lfd.optim.runs.ray_workers import connect
 
-            connect(ray)  # before the run starts: a cluster that cannot be reached leaves nothing behind
+            connect(ray, watch=True)  # before the run starts: a cluster that cannot be reached leaves nothing behind
         if resume:
             prepared = resume_run(run_dir, iterations, file_task, given)
         else:
@@ -272,6 +272,10 @@ def sweep(
     with user_errors():
         plan = load_sweep(sweep_file)
         folder = check_output_folder(out or Path("runs") / plan.name, "sweep folder")
+        if ray is not None:
+            from stl_lfd.optim.runs.ray_workers import connect
+
+            connect(ray, watch=True)  # before any cell: one line for a cluster that cannot be reached, or is lost
         results = (lambda cells: ray_results(cells, ray)) if ray is not None else (lambda cells: local_results(cells, jobs))
         again = f"stlopt sweep {sweep_file}" + (f" --out {out}" if out else "")
         with (

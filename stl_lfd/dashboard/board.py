@@ -52,6 +52,7 @@ class Dashboard:
     def __init__(self, folder: Path) -> None:
         self.folder = Path(folder).resolve()
         self.shown: OrderedDict[Path, Shown] = OrderedDict()
+        self.listed = 0  # runs the folder's page lists: kept whatever MAX_SHOWN says, or each refresh would read them all again
         self.lock = threading.Lock()  # over `shown` only, never across a read
 
     def entry(self, path: Path) -> Shown:
@@ -60,7 +61,7 @@ class Dashboard:
             entry = self.shown.get(path)
             if entry is None:
                 entry = self.shown[path] = Shown(RunView(path))
-                while len(self.shown) > MAX_SHOWN:
+                while len(self.shown) > max(MAX_SHOWN, self.listed):
                     self.shown.popitem(last=False)
             self.shown.move_to_end(path)
         with entry.lock:
@@ -93,9 +94,12 @@ class Dashboard:
     def resolve(self, relative: Any) -> Path | None:
         """The folder at `relative` under the dashboard's folder, resolved (`..` and links),
         None when it is not a folder inside it."""
-        if not isinstance(relative, str) or "\0" in relative or len(relative) > MAX_ADDRESS:
+        if not isinstance(relative, str) or len(relative) > MAX_ADDRESS:
             return None
-        path = Path(os.path.normpath(self.folder / unquote(relative).lstrip("/")))
+        relative = unquote(relative)
+        if "\0" in relative:
+            return None
+        path = Path(os.path.normpath(self.folder / relative.lstrip("/")))
         return path if inside(path, self.folder) and path.is_dir() else None
 
     def address(self, prefix: str, path: Path) -> str:

@@ -66,7 +66,7 @@ def best_so_far_line(numbers: np.ndarray, values: np.ndarray) -> tuple[list, lis
 def robustness_figure(view: RunView) -> Figure:
     """Each trial's robustness (thinned for the screen), the best so far, zero and the
     unoptimised skill's."""
-    numbers, values = np.asarray(view.trials.numbers), np.asarray(view.trials.robustness)
+    numbers, values = np.array(view.trials.numbers), np.array(view.trials.robustness)  # copies: a refresh may append meanwhile
     best_x, best_y = best_so_far_line(numbers, values)
     trial_x, trial_y = thinned_trials(numbers, values)
     data = [
@@ -82,10 +82,10 @@ def robustness_figure(view: RunView) -> Figure:
 
 def parts_figure(view: RunView) -> Figure:
     """The robustness of each top-level part of the spec, trial by trial (thinned)."""
-    numbers = np.asarray(view.trials.numbers)
+    numbers = np.array(view.trials.numbers)
     data = []
     for name, column in list(view.trials.components.items())[:MAX_PARTS]:
-        x, y = thinned_trials(numbers, np.asarray(column))
+        x, y = thinned_trials(numbers, np.array(column)[: len(numbers)])
         data.append({"type": "scatter", "mode": "lines+markers", "name": label(name), "x": x, "y": y})
     return {"data": data, "layout": _layout("the spec's parts", xaxis={"title": {"text": "trial"}})}
 

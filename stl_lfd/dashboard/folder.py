@@ -44,10 +44,12 @@ class Listing:
     sweeps: tuple[Path, ...]
 
 
-def find(folder: Path, depth: int = MAX_DEPTH) -> Listing:
+def find(folder: Path, depth: int = MAX_DEPTH, root: Path | None = None) -> Listing:
     """The runs and sweeps under `folder` (itself included), sorted by path; a link that leads
-    out of `folder` is not followed."""
-    root = Path(folder).resolve()
+    out of `root` (default: `folder`) is not followed."""
+    root = Path(folder).resolve() if root is None else root
+    if not inside(Path(folder), root):
+        return Listing((), ())
     runs: list[Path] = []
     sweeps: list[Path] = []
 
@@ -73,13 +75,14 @@ def inside(path: Path, root: Path) -> bool:
     """Whether `path`, once resolved (`..` and links), lies in the resolved folder `root`."""
     try:
         return path.resolve().is_relative_to(root)
-    except (OSError, RuntimeError):  # a loop of links
+    except (OSError, RuntimeError, ValueError):  # a loop of links, a NUL byte
         return False
 
 
-def sweep_runs(sweep: Path) -> list[Path]:
-    """The finished cells of a sweep folder (a cell's run directory appears when complete)."""
-    return find(sweep / SWEEP_RUNS, depth=1).runs
+def sweep_runs(sweep: Path, root: Path | None = None) -> list[Path]:
+    """The finished cells of a sweep folder (a cell's run directory appears when complete), none
+    of them through a link out of `root` (default: the sweep folder)."""
+    return find(sweep / SWEEP_RUNS, depth=1, root=root if root is not None else Path(sweep).resolve()).runs
 
 
 class TrialTable:
@@ -97,23 +100,23 @@ class TrialTable:
         return len(self.numbers)
 
     def append(self, record: dict[str, Any]) -> None:
+        """Add a trial: every value is converted first, so that a bad one adds nothing."""
         count = len(self.numbers)
-        self.numbers.append(record["trial"])
+        number = array("q", [record["trial"]])
         robustness = record.get("robustness")
-        self.robustness.append(math.nan if robustness is None else float(robustness))
-        for name, value in (record.get("components") or {}).items():
-            if name not in self.components:
-                self.components[name] = array("d", [math.nan]) * count
-            column = self.components[name]
-            column.append(float(value) if type(value) in (int, float) else math.nan)
-        for column in self.components.values():
-            if len(column) == count:
-                column.append(math.nan)
+        value = math.nan if robustness is None else float(robustness)
+        parts = {name: float(part) if type(part) in (int, float) else math.nan for name, part in (record.get("components") or {}).items()}
+        self.numbers.extend(number)
+        self.robustness.append(value)
+        for name in parts.keys() - self.components.keys():
+            self.components[name] = array("d", [math.nan]) * count
+        for name, column in self.components.items():
+            column.append(parts.get(name, math.nan))
         self.last = record
 
     def best(self) -> tuple[int, float] | None:
         """The best trial's number and robustness (the first of equals), None before one scored."""
-        values = np.frombuffer(self.robustness, dtype=float) if self.robustness else np.empty(0)
+        values = np.array(self.robustness, dtype=float)  # a copy: another request may append meanwhile
         if not np.isfinite(values).any():
             return None
         index = int(np.nanargmax(np.where(np.isfinite(values), values, np.nan)))
@@ -197,9 +200,9 @@ class RunView:
                 complete = rest + chunk
                 cut = complete.rfind(b"\n") + 1
                 rest = complete[cut:]
+                self._append_lines(complete[:cut])
                 if len(rest) > MAX_LINE_BYTES:
                     raise ValueError(f"{TRIALS_FILE} line {len(self.trials) + 1}: longer than {MAX_LINE_BYTES // 1_000_000} MB, not a trial record")
-                self._append_lines(complete[:cut])
 
     def _append_lines(self, data: bytes) -> None:
         for line in data.split(b"\n")[:-1]:  # data ends with a newline; offsets count exactly the bytes read

@@ -80,8 +80,9 @@ def index_signature(board: Dashboard) -> tuple[list[Shown], dict[Path, int], lis
     """The folder's runs, its sweeps with their finished cells, and what the index shows
     changes with: their paths, the runs' versions and writers, and the sweeps' cells."""
     listing = find(board.folder)
+    board.listed = len(listing.runs)
     entries = [board.entry(path) for path in listing.runs]
-    cells = {path: len(sweep_runs(path)) for path in listing.sweeps}
+    cells = {path: len(sweep_runs(path, board.folder)) for path in listing.sweeps}
     signature = [str(path) for path in listing.runs + listing.sweeps] + [[entry.view.version, entry.view.writer()] for entry in entries] + list(cells.values())
     return entries, cells, signature
 
@@ -242,7 +243,7 @@ def register(app: Any, board: Dashboard) -> None:
         path = board.sweep_at(relative)
         if path is None:
             raise PreventUpdate
-        entries = [board.entry(run) for run in sweep_runs(path)]
+        entries = [board.entry(run) for run in sweep_runs(path, board.folder)]
         signature = [str(entry.view.path) for entry in entries] + [entry.view.version for entry in entries]
         if signature == seen:
             raise PreventUpdate

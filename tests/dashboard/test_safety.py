@@ -68,13 +68,13 @@ def test_no_address_from_the_browser_leads_outside_the_folder(folders):
     assert inside.status_code == 200 and "finished" in inside.get_data(as_text=True)
     refused = [
         "../outside/run", str(outside / "run"), f"{runs}/../outside/run", "run/../../outside/run", "%2e%2e/outside/run", "link",
-        "nothing/here", "afile", "afile/x", "", None, 7, {"a": 1}, ["run"], "run\0", "a" * 10_000,
+        "nothing/here", "afile", "afile/x", "", None, 7, {"a": 1}, ["run"], "run\0", "%00", "run%00", "a" * 10_000,
     ]  # fmt: skip
     answers = {callback(client, RUN_OUTPUTS, "run-tick", [("run-path", address), ("run-seen", None)]).status_code for address in refused}
     assert answers == {204}  # one answer, no update, whatever was asked: nothing read, nothing told
     sweeps = [callback(client, SWEEP_OUTPUTS, "sweep-tick", [("sweep-path", address), ("sweep-seen", None)]) for address in ("grid", "../outside/grid")]
     assert [answer.status_code for answer in sweeps] == [200, 204]
-    pages = {address: route(client, "/run/" + address) for address in ("../outside/run", "link", "nothing/here", "afile/x")}
+    pages = {address: route(client, "/run/" + address) for address in ("../outside/run", "link", "nothing/here", "afile/x", "%00")}
     assert all("no such folder here" in page for page in pages.values())
     assert "run-status" in route(client, "/run/run")
 
@@ -153,8 +153,11 @@ def test_the_kept_runs_are_bounded(runs_folder, tmp_path, monkeypatch):
     board = Dashboard(tmp_path / "runs")
     for _ in range(2500):
         assert board.run_at("nothing/here") is None
-    index_signature(board)
-    assert list(board.shown) == [tmp_path / "runs" / f"run{index}" for index in (2, 3, 4)]
+    for index in range(5):  # shown one by one, as run pages: the last MAX_SHOWN are kept
+        board.entry((tmp_path / "runs" / f"run{index}").resolve())
+    assert list(board.shown) == [(tmp_path / "runs" / f"run{index}").resolve() for index in (2, 3, 4)]
+    index_signature(board)  # the folder's page lists all five: all are kept, or each refresh would read them again
+    assert len(board.shown) == 5
 
 
 def test_a_long_run_is_thinned_for_the_screen_without_losing_its_extremes():
@@ -180,3 +183,34 @@ def test_paths_are_refused_before_anything_is_read(tmp_path):
     board = Dashboard(tmp_path)
     assert board.resolve("../" + tmp_path.name) == tmp_path.resolve()  # `..` that stays inside is the folder itself
     assert board.run_at("..") is None and board.sweep_at("/etc") is None
+
+
+def test_a_sweep_whose_runs_folder_links_out_is_not_read(runs_folder, tmp_path):
+    runs, outside = tmp_path / "runs", tmp_path / "outside"
+    shutil.copytree(runs_folder / "grid", outside / "grid")
+    (runs / "sweep").mkdir(parents=True)
+    shutil.copy(runs_folder / "grid" / "sweep.yaml", runs / "sweep" / "sweep.yaml")
+    (runs / "sweep" / "runs").symlink_to(outside / "grid" / "runs")
+    board = Dashboard(runs)
+    entries, cells, _ = index_signature(board)
+    assert cells == {runs / "sweep": 0}
+    client = create_app(runs).server.test_client()
+    answer = callback(client, SWEEP_OUTPUTS, "sweep-tick", [("sweep-path", "sweep"), ("sweep-seen", None)])
+    assert "0 runs finished" in answer.get_data(as_text=True)
+
+
+def test_two_requests_drawing_one_run_while_it_grows_never_break_it(runs_folder, tmp_path):
+    from stl_lfd.dashboard.figures import robustness_figure
+
+    run = tmp_path / "runs" / "growing"
+    shutil.copytree(runs_folder / "finished", run)
+    board = Dashboard(tmp_path / "runs")
+    view = board.entry(run.resolve()).view
+    held = np.array(view.trials.robustness)  # what a figure being drawn holds
+    last = json.loads((run / "trials.jsonl").read_text().splitlines()[-1])
+    with open(run / "trials.jsonl", "a") as stream:
+        stream.write(json.dumps(last | {"trial": 6}) + "\n")
+        stream.write(json.dumps(last | {"trial": 7, "robustness": 10**400}) + "\n")  # too large for a float: damaged
+    view.refresh()
+    assert list(view.trials.numbers) == [1, 2, 3, 4, 5, 6] and len(view.trials.robustness) == 6 and held.size == 5
+    assert view.problem and len(robustness_figure(view)["data"][0]["x"]) == 6

@@ -121,6 +121,8 @@ def start_run(
     and `files` (name -> text) written into the run directory with the rest, for task paths
     that point into it."""
     check_new_run_path(Path(out))
+    if isinstance(task, TaskInputs) and spec is not None:
+        raise TypeError("start_run: resolved inputs already hold their spec; give `spec` to resolve() instead")
     resolved = task if isinstance(task, TaskInputs) else resolve(task, spec)
     task = resolved.task
     if models is None:

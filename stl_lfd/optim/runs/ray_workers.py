@@ -38,13 +38,13 @@ HEAD_PATIENCE = 5.0  # seconds a joined cluster's head may not answer before the
 _built: tuple[str, Any] | None = None  # in a Ray worker process: the run it last served (its key) and that run's objective
 
 
-def connect(address: str | None) -> None:
+def connect(address: str | None, watch: bool = False) -> None:
     """Join a Ray cluster once per process: `auto` (the cluster this machine belongs to), a
     cluster's address, or None for a new local one; nothing when Ray is already initialised
     (by the caller, or an earlier run in this process). An address is checked first (its form,
     and that something answers there within `CONNECT_SECONDS`), and every failure to join is
-    one ConfigError line; once joined, a head that stops answering ends the process with one
-    line (`watch_head`)."""
+    one ConfigError line. With `watch` (the command line's runs), a head that stops answering
+    then ends the process with one line (`watch_head`)."""
     try:
         import ray
     except ImportError:
@@ -63,7 +63,7 @@ def connect(address: str | None) -> None:
     if problem:
         raise ConfigError(f"{spelled('ray')} {address}: {problem}")
     _messages_to_stderr()
-    if address is not None:
+    if watch and address is not None:
         watch_head(address)
 
 
