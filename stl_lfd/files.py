@@ -15,7 +15,7 @@ import stat
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterator
+from typing import BinaryIO, Iterator
 
 from stl_lfd.errors import OutputError
 
@@ -86,17 +86,24 @@ def read_text(path: Path | str, what: str, max_bytes: int = MAX_TEXT_BYTES) -> s
     raise UnreadableFile(problem)
 
 
-def read_bounded(path: Path | str, what: str, max_bytes: int) -> bytes:
-    """The bytes of the regular file at `path`, refused when over `max_bytes` (UnreadableFile);
-    OSError when it cannot be opened."""
-    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)  # a FIFO opens without waiting for a writer
+def open_regular(path: Path | str, what: str) -> BinaryIO:
+    """`path` opened for reading in binary when it is a regular file, without waiting (a FIFO
+    opens without a writer, then is refused, as a device or socket is: UnreadableFile);
+    IsADirectoryError for a folder, OSError when it cannot be opened."""
+    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
     mode = os.fstat(descriptor).st_mode
     if not stat.S_ISREG(mode):
         os.close(descriptor)
         if stat.S_ISDIR(mode):
             raise IsADirectoryError(path)
         raise UnreadableFile(f"not a regular file (a pipe, device or socket); expected a {what}")
-    with os.fdopen(descriptor, "rb") as stream:
+    return os.fdopen(descriptor, "rb")
+
+
+def read_bounded(path: Path | str, what: str, max_bytes: int) -> bytes:
+    """The bytes of the regular file at `path`, refused when over `max_bytes` (UnreadableFile);
+    OSError when it cannot be opened."""
+    with open_regular(path, what) as stream:
         data = stream.read(max_bytes + 1)
     if len(data) > max_bytes:
         raise UnreadableFile(f"the file is larger than {_size(max_bytes)}; is it the right {what}?")

@@ -12,18 +12,17 @@ from __future__ import annotations
 import json
 import math
 import os
-import stat
 import time
 from array import array
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import Any
 
 import numpy as np
 import orjson
 import yaml
 
-from stl_lfd.files import UnreadableFile, read_text
+from stl_lfd.files import UnreadableFile, open_regular, read_text
 from stl_lfd.optim.runs.directory import PENDING_FILE, SUMMARY_FILE, TASK_FILE, TRIALS_FILE, RunDirectory
 from stl_lfd.optim.runs.lock import LOCK_FILE
 
@@ -190,9 +189,11 @@ class RunView:
         """Append the complete lines written since the last read, a chunk at a time (a line
         still being written waits for the next refresh)."""
         try:
-            stream = open_regular(self.path / TRIALS_FILE)
+            stream = open_regular(self.path / TRIALS_FILE, TRIALS_FILE)
         except FileNotFoundError:
             raise ValueError(f"{TRIALS_FILE}: missing") from None
+        except (IsADirectoryError, UnreadableFile):
+            raise ValueError(f"{TRIALS_FILE}: not a regular file") from None
         with stream:
             stream.seek(self._offset)
             rest = b""
@@ -316,17 +317,6 @@ def _stat(path: Path) -> tuple[int, int, int]:
     except OSError:
         return (-1, -1, -1)
     return (status.st_size, status.st_mtime_ns, status.st_ino)
-
-
-def open_regular(path: Path) -> BinaryIO:
-    """`path` opened for reading when it is a regular file; ValueError naming the file when it
-    is anything else (a folder, a FIFO whose read would block, a device), FileNotFoundError
-    when it is not there."""
-    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
-    if not stat.S_ISREG(os.fstat(descriptor).st_mode):
-        os.close(descriptor)
-        raise ValueError(f"{path.name}: not a regular file")
-    return os.fdopen(descriptor, "rb")
 
 
 def _text(path: Path) -> str:

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 from stl_lfd.errors import ConfigError, SpecError
 from stl_lfd.hsmm import HSMM, learn_from_folder, load_model
 from stl_lfd.optim.settings import SINGLE_SKILL
-from stl_lfd.optim.task import Task
+from stl_lfd.optim.task import Task, read_behaviour
 from stl_lfd.sim import Scene, load_scene
-from stl_lfd.skill.behaviour import Behaviour, behaviour_models, load_behaviour
+from stl_lfd.skill.behaviour import Behaviour, behaviour_models
 from stl_lfd.stl import SpecParts, ast, load_spec, split_spec
 
 
@@ -41,8 +41,8 @@ def resolve(task: Task, spec: ast.Spec | None = None) -> TaskInputs:
     """The inputs of `task`: its spec (or `spec`, already parsed), scene and behaviour (as
     `load_task` read it, when it did)."""
     behaviour = task.loaded_behaviour
-    if behaviour is None and task.behaviour is not None:
-        behaviour = load_behaviour(task.behaviour.resolve())
+    if behaviour is None and task.behaviour is not None:  # a task built in Python, not read by load_task
+        behaviour = read_behaviour(task.behaviour)
     return TaskInputs(task, load_spec(task.spec) if spec is None else spec, load_scene(task.scene), behaviour)
 
 

@@ -192,7 +192,7 @@ def parse_task(data: dict[str, Any], path: Path) -> Task:
         raise ConfigError(f"{path}: give exactly one of 'model' (a model file), 'demos' (a folder to learn from) or 'behaviour' (a behaviour file)")
     base = path.parent
     behaviour = _existing(base, data["behaviour"], path, "behaviour") if "behaviour" in data else None
-    loaded = _load_behaviour(behaviour) if behaviour is not None else None
+    loaded = read_behaviour(behaviour) if behaviour is not None else None
     semantics = choice(data.get("semantics", DEFAULT_SEMANTICS), SEMANTICS, path, "semantics")
     backend = choice(data.get("backend", DEFAULT_BACKEND), backend_names(), path, "backend")
     task = Task(
@@ -222,7 +222,7 @@ def parse_task(data: dict[str, Any], path: Path) -> Task:
     return task
 
 
-def _load_behaviour(path: Path) -> Any:
+def read_behaviour(path: Path) -> Any:
     """The behaviour file, read from its resolved path (so that the paths inside it are the same
     whether a task file names it relatively or a run's record absolutely)."""
     from stl_lfd.skill.behaviour import load_behaviour

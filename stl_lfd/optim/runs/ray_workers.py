@@ -71,9 +71,8 @@ def check_answers(address: str) -> None:
     """ConfigError unless `address` is `HOST:PORT` (or `ray://HOST:PORT`) and something accepts
     a connection there within `CONNECT_SECONDS` (Ray itself would wait for minutes)."""
     host, port = split_address(address)
-    try:
-        socket.create_connection((host, port), timeout=CONNECT_SECONDS).close()
-    except OSError as error:
+    error = _unanswered(host, port, CONNECT_SECONDS)
+    if error is not None:
         reason = "no answer" if isinstance(error, TimeoutError) else (error.strerror or str(error))
         raise ConfigError(
             f"{spelled('ray')} {address}: nothing answers there ({reason}); start the cluster's head ('ray start' on the head node) "
@@ -135,13 +134,6 @@ def watch_head(address: str, every: float = 1.0, patience: float = HEAD_PATIENCE
     except ConfigError:
         host, port = None, 0
 
-    def answers() -> bool:
-        try:
-            socket.create_connection((host, port), timeout=every).close()
-        except OSError:
-            return False
-        return True
-
     message = (  # spelled here: options are spelled as the command line's in its thread only
         f"error: {spelled('ray')} {address}: the cluster's head stopped answering; the recorded trials are kept: "
         f"continue the run with the same command and {spelled('resume')}\n"
@@ -151,7 +143,7 @@ def watch_head(address: str, every: float = 1.0, patience: float = HEAD_PATIENCE
         silent_since = None
         while host is not None:
             time.sleep(every)
-            if answers():
+            if _unanswered(host, port, every) is None:
                 silent_since = None
                 continue
             silent_since = silent_since or time.monotonic()
@@ -163,6 +155,15 @@ def watch_head(address: str, every: float = 1.0, patience: float = HEAD_PATIENCE
     thread = threading.Thread(target=watch, name="ray-head-watch", daemon=True)
     thread.start()
     return thread
+
+
+def _unanswered(host: str, port: int, timeout: float) -> OSError | None:
+    """Why nothing accepted a connection at `host:port` within `timeout` s, None when something did."""
+    try:
+        socket.create_connection((host, port), timeout=timeout).close()
+    except OSError as error:
+        return error
+    return None
 
 
 def _gcs_address() -> str | None:
