@@ -8,25 +8,25 @@ the table shows the wall time per trial and the executor's overhead per trial.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 from benchmarks._timing import Row, print_table
-from stl_lfd.optim import finish_run, load_task, start_run
+from benchmarks.bench_ray import same_trials
+from stl_lfd.optim import RunDirectory, Trial, finish_run, load_task, start_run
 from stl_lfd.sim import Command
 
 ROOT = Path(__file__).resolve().parent.parent
 EXECUTOR = ROOT / "examples" / "pybullet_executor.py"
 
 
-def timed_run(task, folder: Path) -> tuple[float, list[dict]]:
+def timed_run(task, folder: Path) -> tuple[float, list[Trial]]:
     start = time.perf_counter()
     finish_run(start_run(task, folder))
     seconds = time.perf_counter() - start
-    return seconds, [json.loads(line) for line in (folder / "trials.jsonl").read_text().splitlines()]
+    return seconds, RunDirectory(folder).trials()
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -38,7 +38,7 @@ def main(argv: list[str] | None = None) -> None:
     with tempfile.TemporaryDirectory() as folder:
         in_process, in_process_trials = timed_run(task, Path(folder) / "pybullet")
         external, external_trials = timed_run(command, Path(folder) / "command")
-    same = [(t["x"], t["robustness"]) for t in in_process_trials] == [(t["x"], t["robustness"]) for t in external_trials]
+    same = same_trials(in_process_trials, external_trials)
     executions = arguments.trials + 1  # the unoptimised skill is executed too
     overhead = (external - in_process) / executions
     print_table(

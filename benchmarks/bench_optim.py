@@ -13,7 +13,6 @@ the acceptance figures.
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import tempfile
 import time
@@ -25,7 +24,7 @@ from rich.console import Console
 from rich.table import Table
 
 from benchmarks._timing import Row, print_table
-from stl_lfd.optim import Optimizer, finish_run, load_task, local_map, start_run
+from stl_lfd.optim import Optimizer, RunDirectory, finish_run, load_task, local_map, start_run
 from stl_lfd.optim.methods import ProbabilityOfImprovement, Problem, Request
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -58,9 +57,9 @@ def one_run(arguments: tuple[str, str, str, str, int]) -> dict:
     task = replace(task, semantics=semantics)
     with tempfile.TemporaryDirectory() as folder:
         summary = finish_run(start_run(task, Path(folder) / "run"))
-        trials = [json.loads(line) for line in (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()]
-    proposed = [trial["optimizer_seconds"] for trial in trials if trial["phase"] != "sobol"]
-    timing = {"optimizer_median": statistics.median(proposed), "rollout_median": statistics.median(trial["rollout_seconds"] for trial in trials)}
+        trials = RunDirectory(Path(folder) / "run").trials()
+    proposed = [trial.optimizer_seconds for trial in trials if trial.phase != "sobol"]
+    timing = {"optimizer_median": statistics.median(proposed), "rollout_median": statistics.median(trial.rollout_seconds for trial in trials)}
     return summary.to_json() | timing | {"spec": spec, "method": method}
 
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import statistics
 import tempfile
 import time
@@ -79,7 +78,7 @@ def run_timing(name: str, untracked: bool = False) -> RunTiming:
     """Run the task `name` of RUNS with method plan (`untracked`: scoring the plan as it stands)
     and read its trials' timings."""
     from benchmarks.bench_suite import untracked as plan_as_it_stands
-    from stl_lfd.optim import finish_run, load_task, start_run
+    from stl_lfd.optim import RunDirectory, finish_run, load_task, start_run
 
     path, backend = RUNS[name]
     task = load_task(path).with_overrides(method="plan", backend=backend, seed=0)
@@ -87,9 +86,9 @@ def run_timing(name: str, untracked: bool = False) -> RunTiming:
         warnings.simplefilter("ignore")
         with start_run(task, Path(folder) / "run") as prepared:
             finish_run(prepared)
-        trials = [json.loads(line) for line in (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()]
-    proposals = [trial["optimizer_seconds"] for trial in trials]
-    rollouts = [trial["rollout_seconds"] for trial in trials]
+        trials = RunDirectory(Path(folder) / "run").trials()
+    proposals = [trial.optimizer_seconds for trial in trials]
+    rollouts = [trial.rollout_seconds for trial in trials]
     return RunTiming(name, backend, untracked, len(trials), statistics.median(proposals), statistics.median(rollouts), proposals[0])
 
 

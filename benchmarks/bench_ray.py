@@ -10,19 +10,18 @@ this process). The trials must be identical for the same number of workers.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 from benchmarks._timing import Row, print_table
-from stl_lfd.optim import finish_run, load_task, start_run
+from stl_lfd.optim import RunDirectory, Trial, finish_run, load_task, start_run
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def timed_run(task, folder: Path, ray: str | None = None) -> tuple[float, list[dict]]:
+def timed_run(task, folder: Path, ray: str | None = None) -> tuple[float, list[Trial]]:
     """The wall time of the run's trials (not of its unoptimised execution, which runs in this
     process in every case) and its trials' records."""
     prepared = start_run(task, folder)
@@ -30,11 +29,11 @@ def timed_run(task, folder: Path, ray: str | None = None) -> tuple[float, list[d
     with prepared:
         finish_run(prepared, ray=ray)
     seconds = time.perf_counter() - start
-    return seconds, [json.loads(line) for line in (folder / "trials.jsonl").read_text().splitlines()]
+    return seconds, RunDirectory(folder).trials()
 
 
-def same_trials(first: list[dict], second: list[dict]) -> bool:
-    return [(t["x"], t["robustness"]) for t in first] == [(t["x"], t["robustness"]) for t in second]
+def same_trials(first: list[Trial], second: list[Trial]) -> bool:
+    return [(t.x.tolist(), t.robustness) for t in first] == [(t.x.tolist(), t.robustness) for t in second]
 
 
 def start_up_seconds(task, workers: int) -> float:
@@ -77,7 +76,7 @@ def main(argv: list[str] | None = None) -> None:
         ray.shutdown()
     same = same_trials(one_trials, ray_one_trials) and same_trials(local_two_trials, ray_two_trials)
     trials = arguments.trials
-    proposing = sum(t["optimizer_seconds"] for t in one_trials)
+    proposing = sum(t.optimizer_seconds for t in one_trials)
     per_trial = (ray_one - start_one - one) / trials
     print_table(
         f"Trials on Ray (phi1, PyBullet, method {task.optimizer.method}, {trials} trials, seed 0, local Ray of 2 CPUs; "

@@ -145,15 +145,16 @@ def run_one(problem: str, method: str, seed: int) -> dict:
     task = _with_learned_model(load_task(task_file(problem)), problem.partition("+")[0])
     executed = executed_as(problem, task)
     if method == "tpe":
-        trials, initial = _run_tpe(executed, seed)
+        trials, inserted, initial = _run_tpe(executed, seed)
     else:
         name, initial_trials = method_and_initial(method)
         with untracked() if name == "plan-untracked" else contextlib.nullcontext():
-            trials, initial = _run_tool(executed.with_overrides(method=name.removesuffix("-untracked"), seed=seed, initial=initial_trials))
-    best_x = max((trial for trial in trials if trial["robustness"] is not None), key=lambda trial: trial["robustness"], default={}).get("x")
-    robustness = [trial["robustness"] for trial in trials]
-    satisfied = [trial["trial"] for trial in trials if trial["robustness"] is not None and trial["robustness"] > 0]
-    proposed = [trial["optimizer_seconds"] for trial in trials if trial["phase"] not in ("sobol", "startup")]
+            trials, inserted, initial = _run_tool(executed.with_overrides(method=name.removesuffix("-untracked"), seed=seed, initial=initial_trials))
+    scored = [trial for trial in trials if trial.robustness is not None]
+    best_x = max(scored, key=lambda trial: trial.robustness).x.tolist() if scored else None
+    robustness = [trial.robustness for trial in trials]
+    satisfied = [trial.trial for trial in scored if trial.robustness > 0]
+    proposed = [trial.optimizer_seconds for trial in trials if trial.phase not in ("sobol", "startup")]
     return {
         "problem": problem,
         "method": method,
@@ -164,11 +165,11 @@ def run_one(problem: str, method: str, seed: int) -> dict:
         "first_satisfied": satisfied[0] if satisfied else None,
         "best_robustness": max((value for value in robustness if value is not None), default=None),
         "optimizer_seconds": statistics.median(proposed) if proposed else 0.0,
-        "rollout_seconds": statistics.median(trial["rollout_seconds"] for trial in trials),
+        "rollout_seconds": statistics.median(trial.rollout_seconds for trial in trials),
         "robustness": robustness,
         "best_x": best_x,
         "processor": processor(),
-    } | ({"inserted": [trial.get("inserted") for trial in trials]} if any(trial.get("inserted") is not None for trial in trials) else {})
+    } | ({"inserted": inserted} if any(value is not None for value in inserted) else {})
 
 
 def processor() -> str:
@@ -226,9 +227,9 @@ def _learning_digest(demos: Path, states: int) -> str:
     return digest.hexdigest()[:12]
 
 
-def _run_tool(task) -> tuple[list[dict], float]:
-    """The run's trials (each with `inserted`, the physical check of a contact task's trial, or
-    None where there is none) and the unoptimised skill's robustness."""
+def _run_tool(task) -> tuple[list, list[bool | None], float]:
+    """The run's trials, whether each put the shaft in the hole (the physical check of a contact
+    task's trial, or None where there is none), and the unoptimised skill's robustness."""
     import tempfile
 
     from benchmarks.physical import holder_pose, is_contact_task, physically_inserted, scene_geometry
@@ -237,18 +238,20 @@ def _run_tool(task) -> tuple[list[dict], float]:
     with tempfile.TemporaryDirectory() as folder:
         prepared = start_run(task, Path(folder) / "run")
         finish_run(prepared)
-        trials = [json.loads(line) for line in (Path(folder) / "run" / "trials.jsonl").read_text().splitlines()]
-        contact, run = is_contact_task(task), RunDirectory(Path(folder) / "run")
+        run = RunDirectory(Path(folder) / "run")
+        trials, inserted = run.trials(), []
         for trial in trials:
-            signals = run.recorded_signals(trial["trial"]) if contact else None
-            trial["inserted"] = None if signals is None else physically_inserted(signals, holder_pose(task), scene_geometry(task.scene))
-        return trials, prepared.summary.initial_robustness
+            signals = run.recorded_signals(trial.trial) if is_contact_task(task) else None
+            inserted.append(None if signals is None else physically_inserted(signals, holder_pose(task), scene_geometry(task.scene)))
+        return trials, inserted, prepared.summary.initial_robustness
 
 
-def _run_tpe(task, seed: int) -> tuple[list[dict], float]:
+def _run_tpe(task, seed: int) -> tuple[list, list[None], float]:
+    """The trials of Optuna's TPE on the task's objective (no physical check: None for each),
+    and the unoptimised skill's robustness."""
     import optuna
 
-    from stl_lfd.optim import objective_for, resolve, task_models
+    from stl_lfd.optim import Trial, objective_for, resolve, task_models
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     models = task_models(resolve(task))
@@ -268,16 +271,9 @@ def _run_tpe(task, seed: int) -> tuple[list[dict], float]:
         except Exception:
             robustness = None
             study.tell(trial, state=optuna.trial.TrialState.FAIL)
-        trials.append(
-            {
-                "trial": number,
-                "phase": "startup" if number <= TPE_STARTUP else "tpe",
-                "robustness": robustness,
-                "optimizer_seconds": chosen - start,
-                "rollout_seconds": time.perf_counter() - chosen,
-            }
-        )
-    return trials, initial
+        phase, status = "startup" if number <= TPE_STARTUP else "tpe", "failed" if robustness is None else "ok"
+        trials.append(Trial(number, phase, x, robustness, status, optimizer_seconds=chosen - start, rollout_seconds=time.perf_counter() - chosen))
+    return trials, [None] * len(trials), initial
 
 
 class HeldIndexError(ValueError):

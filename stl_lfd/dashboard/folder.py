@@ -19,12 +19,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import orjson
 import yaml
 
-from stl_lfd.files import UnreadableFile, open_regular, read_text
+from stl_lfd.files import UnreadableFile, read_text
 from stl_lfd.optim.runs.directory import PENDING_FILE, SUMMARY_FILE, TASK_FILE, TRIALS_FILE, RunDirectory
 from stl_lfd.optim.runs.lock import LOCK_FILE
+from stl_lfd.optim.runs.trial_log import LongLine, TrialLog
 
 SWEEP_FILE = "sweep.yaml"
 SWEEP_RUNS = "runs"
@@ -32,7 +32,6 @@ WATCHED = (TASK_FILE, TRIALS_FILE, SUMMARY_FILE, PENDING_FILE, LOCK_FILE)  # a c
 MAX_DEPTH = 3  # how deep under the folder runs and sweeps are looked for
 MAX_FILE_BYTES = 10_000_000  # task.yaml, summary.json, pending.json: a few kB each
 MAX_LINE_BYTES = 1_000_000  # a trial's line in trials.jsonl: a few kB
-CHUNK_BYTES = 4_000_000  # trials.jsonl is read this much at a time, never whole
 
 
 @dataclass(frozen=True)
@@ -143,8 +142,11 @@ class RunView:
     problem: str = ""
     version: int = 0
     task_version: int = 0  # grows when task.yaml is read (again: another run moved in)
-    _offset: int = 0
+    _log: TrialLog = field(init=False)
     _stamp: tuple = ()
+
+    def __post_init__(self) -> None:
+        self._log = TrialLog(self.path / TRIALS_FILE, MAX_LINE_BYTES)
 
     def refresh(self) -> bool:
         """Read what changed since the last refresh; whether anything did. Whatever is wrong
@@ -153,7 +155,7 @@ class RunView:
         if stamp == self._stamp and self.version > 0:
             return False
         if self._stamp and self._moved_in(stamp):
-            self.task, self.trials, self._offset = {}, TrialTable(), 0
+            self.task, self.trials, self._log = {}, TrialTable(), TrialLog(self.path / TRIALS_FILE, MAX_LINE_BYTES)
         self._stamp = stamp
         self.problem = ""
         try:
@@ -169,7 +171,7 @@ class RunView:
         """Whether another run moved in since the last refresh: task.yaml changed, or
         trials.jsonl is another file (`_stat`: size, mtime, inode) or shorter than what was read."""
         (task, trials), (old_task, old_trials) = stamp[:2], self._stamp[:2]
-        return task != old_task or trials[2] != old_trials[2] or trials[0] < self._offset
+        return task != old_task or trials[2] != old_trials[2] or trials[0] < self._log.offset
 
     def _read(self) -> None:
         if not self.task:
@@ -186,35 +188,19 @@ class RunView:
         self._read_new_trials()
 
     def _read_new_trials(self) -> None:
-        """Append the complete lines written since the last read, a chunk at a time (a line
-        still being written waits for the next refresh)."""
+        """Append the complete lines written since the last read (a line still being written
+        waits for the next refresh)."""
         try:
-            stream = open_regular(self.path / TRIALS_FILE, TRIALS_FILE)
+            for line in self._log.read_new():
+                if not _is_trial_record(line.record):
+                    raise ValueError(f"{TRIALS_FILE} line {line.number}: not a trial record")
+                self.trials.append(line.record)
         except FileNotFoundError:
             raise ValueError(f"{TRIALS_FILE}: missing") from None
         except (IsADirectoryError, UnreadableFile):
             raise ValueError(f"{TRIALS_FILE}: not a regular file") from None
-        with stream:
-            stream.seek(self._offset)
-            rest = b""
-            while chunk := stream.read(CHUNK_BYTES):
-                complete = rest + chunk
-                cut = complete.rfind(b"\n") + 1
-                rest = complete[cut:]
-                self._append_lines(complete[:cut])
-                if len(rest) > MAX_LINE_BYTES:
-                    raise ValueError(f"{TRIALS_FILE} line {len(self.trials) + 1}: longer than {MAX_LINE_BYTES // 1_000_000} MB, not a trial record")
-
-    def _append_lines(self, data: bytes) -> None:
-        for line in data.split(b"\n")[:-1]:  # data ends with a newline; offsets count exactly the bytes read
-            number = len(self.trials) + 1
-            if len(line) > MAX_LINE_BYTES:
-                raise ValueError(f"{TRIALS_FILE} line {number}: longer than {MAX_LINE_BYTES // 1_000_000} MB, not a trial record")
-            record = _decoded(line)
-            if not _is_trial_record(record):
-                raise ValueError(f"{TRIALS_FILE} line {number}: not a trial record")
-            self.trials.append(record)
-            self._offset += len(line) + 1
+        except LongLine as error:
+            raise ValueError(f"{TRIALS_FILE} {error}") from None
 
     @property
     def name(self) -> str:
@@ -288,19 +274,6 @@ def held_locks(max_age: float = 0.2) -> dict[tuple[int, int, int], int]:
                 held[(int(major, 16), int(minor, 16), int(inode))] = int(fields[4])
         _locks = (time.monotonic(), held)
     return _locks[1]
-
-
-def _decoded(line: bytes) -> Any:
-    """A line of JSON, None when it is not: orjson first (3x faster), the standard library for
-    what only it reads (the NaN and Infinity that Python writes for such floats)."""
-    try:
-        return orjson.loads(line)
-    except orjson.JSONDecodeError:
-        pass
-    try:
-        return json.loads(line)
-    except (ValueError, RecursionError):
-        return None
 
 
 def _is_trial_record(record: Any) -> bool:

@@ -35,9 +35,10 @@ import numpy as np
 import yaml
 
 from stl_lfd.errors import RunError
-from stl_lfd.files import check_output_folder, write_atomically
+from stl_lfd.files import UnreadableFile, check_output_folder, write_atomically
 from stl_lfd.hsmm import HSMM, load_model, save_model
 from stl_lfd.optim.runs.lock import RunLock
+from stl_lfd.optim.runs.trial_log import TrialLog, decoded
 from stl_lfd.optim.runs.records import Pending, finite, trial_from_json, trial_problem, trial_to_json
 from stl_lfd.optim.settings import SINGLE_SKILL
 from stl_lfd.optim.summary import Summary
@@ -135,31 +136,39 @@ class RunDirectory:
 
     def trials(self) -> list[Trial]:
         """The finished trials, checked: numbered 1, 2, ... and with finite values. A last line
-        cut short by a kill is removed from the file; anything else damaged is a RunError."""
+        cut short by a kill is removed from the file (one whole but for its newline is kept and
+        ended); anything else damaged is a RunError."""
         path = self.path / TRIALS_FILE
+        log = TrialLog(path)
+        trials: list[Trial] = []
         try:
-            text = path.read_text()
-        except (OSError, UnicodeDecodeError) as error:
+            for line in log.read_new():
+                trials.append(self._checked(line.record, line.number, len(trials) + 1))
+        except (OSError, UnreadableFile) as error:
             raise RunError(f"{path}: cannot read ({error})") from None
-        lines = text.split("\n")
-        complete, trials = [], []
-        for number, line in enumerate(lines, start=1):
-            if not line.strip():
-                continue
-            try:
-                trial = trial_from_json(json.loads(line))
-            except (json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError, RecursionError):
-                if number < len(lines) - 1 or text.endswith("\n"):  # a whole line: edited, not killed
-                    raise RunError(f"{path}:{number}: damaged (not a trial record)") from None
-                break
-            problem = trial_problem(trial, len(trials) + 1)
-            if problem:
-                raise RunError(f"{path}:{number}: damaged ({problem})")
-            trials.append(trial)
-            complete.append(line)
-        if self.lock is not None and len(complete) != sum(1 for line in lines if line.strip()):
-            write_atomically(path, "".join(line + "\n" for line in complete))
-        return trials
+        if not log.tail.strip():
+            return trials
+        record = decoded(log.tail)  # None: cut short (a prefix of a JSON object is never JSON)
+        last = None if record is None else self._checked(record, log.lines + 1, len(trials) + 1)
+        if self.lock is not None:  # the next trial's line starts on a line of its own
+            with open(path, "r+b") as stream:
+                stream.truncate(log.offset + len(log.tail) if last else log.offset)
+                stream.seek(0, os.SEEK_END)
+                stream.write(b"\n" if last else b"")
+                os.fsync(stream.fileno())
+        return trials + ([last] if last else [])
+
+    def _checked(self, record: Any, number: int, expected: int) -> Trial:
+        """The trial of line `number` of trials.jsonl, which should be trial `expected`."""
+        where = f"{self.path / TRIALS_FILE}:{number}"
+        try:
+            trial = trial_from_json(record)
+        except (KeyError, TypeError, ValueError, AttributeError, RecursionError):
+            raise RunError(f"{where}: damaged (not a trial record)") from None
+        problem = trial_problem(trial, expected)
+        if problem:
+            raise RunError(f"{where}: damaged ({problem})")
+        return trial
 
     def append_trial(self, trial: Trial, signals: SignalTable | None) -> None:
         """Record a finished trial: its signals first, then its line, flushed to disk."""
