@@ -116,17 +116,15 @@ def _skill_plot(plot: Path | None, name: str) -> Path | None:
 
 
 def _write_skill(skill: _LearnedSkill, output: Path, plot: Path | None) -> None:
-    from stl_lfd.files import atomic_output
     from stl_lfd.hsmm import retrieve, save_model
 
     save_model(skill.model, output)
     if plot is not None:
-        from stl_lfd.report.skill import skill_figure
+        from stl_lfd.report.figures import LEARNED_SKILL, SkillDrawing, save_figure
 
-        shown = skill.shown
-        figure = skill_figure(skill.sequences, shown.means_, shown.covars_, retrieve(shown).positions, skill.model.sample_period_, skill.model.signal_names_)
-        with atomic_output(plot) as temporary:
-            figure.savefig(temporary, dpi=110)
+        shown, model = skill.shown, skill.model
+        drawing = SkillDrawing(skill.sequences, shown.means_, shown.covars_, retrieve(shown).positions, model.sample_period_, model.signal_names_)
+        save_figure(LEARNED_SKILL.draw(drawing), plot, dpi=110)
 
 
 def _report_learned(skill: _LearnedSkill, output: Path, states: int) -> None:

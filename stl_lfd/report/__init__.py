@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from stl_lfd.errors import ConfigError
-from stl_lfd.files import atomic_output, check_output_folder
+from stl_lfd.files import check_output_folder
 from stl_lfd.lazy import lazy_exports
 from stl_lfd.optim.runs.directory import RunDirectory
 from stl_lfd.spelling import spelled
@@ -45,7 +45,6 @@ def write_report(run_dir: Path, out: Path | None = None, compare: list[Path] = (
         if not spec.applies(run, options):
             path.unlink(missing_ok=True)  # an earlier report's, no longer true
             continue
-        with atomic_output(path) as temporary:
-            spec.draw(run, options).savefig(temporary, dpi=100)
+        figures.save_figure(spec.draw(run, options), path)
         written.append((spec.name, path))
     return write_index(run, written, out), [path for _, path in written]

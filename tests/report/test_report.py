@@ -236,3 +236,15 @@ def test_a_new_figure_is_one_spec_class_and_one_registry_line(run_dir, tmp_path,
     assert str(out / "top_speed.png") in result.stdout.split()
     assert_picture(out / "top_speed.png")
     assert "top_speed.png: The hand's top speed in each of the 7 recorded trials." in page_text(out / "index.html")
+
+
+def test_a_learned_skill_and_a_sweep_are_drawn_by_registered_figures(tmp_path):
+    from stl_lfd.report.figures import SkillDrawing, save_figure
+
+    demo = np.column_stack([np.linspace(0, 1, 50), np.linspace(0, 0.5, 50)])
+    drawing = SkillDrawing([demo, demo + 0.01], demo[[0, 25, 49]], np.tile(np.eye(2) * 1e-3, (3, 1, 1)), demo, 0.1, ["x", "y"])
+    skill = figure_named("skill")
+    save_figure(skill.draw(drawing), tmp_path / "skill.png")
+    assert (tmp_path / "skill.png").stat().st_size > 1000
+    assert "2 demonstrations" in skill.caption(drawing) and "3 states" in skill.caption(drawing)
+    assert figure_named("sweep").name == "sweep"

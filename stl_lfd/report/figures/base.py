@@ -5,12 +5,14 @@ skill dashed, the best trial in red."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from pathlib import Path
+from typing import Any, ClassVar
 
 import numpy as np
 from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 
+from stl_lfd.files import atomic_output
 from stl_lfd.report.run_data import RunData
 
 BEST = "tab:red"
@@ -28,9 +30,10 @@ class ReportOptions:
 
 
 class FigureSpec:
-    """One figure of a report: `name` (its file is NAME.png), whether it `applies` to a run and,
-    when it does not, the reason (`left_out`, shown in index.html), how to `draw` it and its
-    `caption`. A new figure is a subclass plus a line in `stl_lfd.report.figures.FIGURES`."""
+    """One figure: `name` (its file is NAME.png), whether it `applies` to what it draws (a run,
+    for the figures of a report) and, when it does not, the reason (`left_out`, shown in
+    index.html), how to `draw` it and its `caption`. A new figure of a run is a subclass plus a
+    line in `stl_lfd.report.figures.FIGURES`."""
 
     name: ClassVar[str]
     left_out: ClassVar[str] = ""
@@ -39,12 +42,18 @@ class FigureSpec:
         """Whether the run has what the figure shows (the default: always)."""
         return True
 
-    def draw(self, run: RunData, options: ReportOptions) -> Figure:
-        """The figure of a run it `applies` to."""
+    def draw(self, subject: Any, options: ReportOptions) -> Figure:
+        """The figure of a run it `applies` to (a `SkillDrawing`, a sweep folder: of those)."""
         raise NotImplementedError
 
-    def caption(self, run: RunData) -> str:
+    def caption(self, subject: Any) -> str:
         raise NotImplementedError
+
+
+def save_figure(figure: Figure, path: Path, dpi: int = 100) -> None:
+    """Write `figure` to `path` (PNG, SVG or PDF by its suffix), whole or not at all."""
+    with atomic_output(Path(path)) as temporary:
+        figure.savefig(temporary, dpi=dpi)
 
 
 def trial_colors(count: int) -> list[tuple]:
