@@ -241,7 +241,7 @@ def tracking_figure(view: RunView) -> Figure | None:
     """The RMS error of the plan and of the learned tracking model as predictions of each
     execution (`tracking.json`), when the run learned how its robot tracks."""
     from stl_lfd.errors import RunError
-    from stl_lfd.optim.tracking import TRACKING_FILE, read_tracking
+    from stl_lfd.optim.tracking_fit import TRACKING_FILE, read_tracking
 
     if not (view.path / TRACKING_FILE).is_file():
         return None

@@ -10,7 +10,7 @@
                                          at several placements of the objects
     trials.py                            `Trial`, `Outcome`, and the observations methods learn from
     loop.py                              the thin loop: ask the method for a batch, execute, record
-    tracking.py                          how the run's robot follows its plans (method plan's)
+    tracking_fit.py                      the tracking and grasp models fitted on a run's executions
     methods/                             one class per search method (plan, stl, pi, logei, random)
                                          behind `SearchMethod.propose(request)`, found by name
     runs/                                run directories, start and resume, recording, ask/tell,

@@ -24,8 +24,8 @@ from stl_lfd.optim.task import Task
 from stl_lfd.optim.trials import Outcome
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim import Backend, BackendOptions, Reference, Scene, new_backend
-from stl_lfd.sim.grasp import GraspModel
-from stl_lfd.sim.tracking import TrackingModel
+from stl_lfd.sim.grasp_model import GraspModel
+from stl_lfd.sim.tracking_model import TrackingModel
 from stl_lfd.skill.behaviour import Behaviour
 from stl_lfd.skill.placed import PlacedSkill, placed_scene
 from stl_lfd.stl import SpecParts
@@ -76,7 +76,7 @@ class SkillObjective:
         or with `tracking` the plan's execution as the tracking model predicts it (carried
         objects where `grasp` says they sit in the hand)."""
         from stl_lfd.sim.kinematic import KinematicBackend
-        from stl_lfd.sim.tracking import PredictingBackend
+        from stl_lfd.sim.tracking_model import PredictingBackend
 
         plan = copy.copy(self)
         plan.backend = KinematicBackend() if tracking is None else PredictingBackend(tracking, grasp)

@@ -12,7 +12,7 @@ from stl_lfd.errors import ConfigError
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim import RunDirectory, SearchSpace, Task, Trial, build_search_space
 from stl_lfd.optim.summary import Summary
-from stl_lfd.optim.tracking import RunTrackingRecord, read_tracking
+from stl_lfd.optim.tracking_fit import RunTrackingRecord, read_tracking
 from stl_lfd.optim.trials import observations
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim import Scene, load_scene

@@ -11,7 +11,9 @@ execution as a `Rollout`. The backends live in a registry (`registry.py`: `pybul
     impedance.py                   the compliant controller both simulators use
     pybullet_panda.py              a compliant Panda in PyBullet
     mujoco_panda.py, mujoco_model.py   a compliant Panda in MuJoCo, and its model
-    kinematic.py, tracking.py      the reference itself; its execution as a robot would track it
+    kinematic.py                   the reference itself, executed exactly
+    tracking_model.py, grasp_model.py   learned from executions: how a robot tracks a reference,
+                                   where a carried object sits in the hand (method plan's)
     command.py, safety.py, plausibility.py   an external executor, behind a safety gate
 
 This package reads no STL and no skill model: callers turn a model into a `Reference` and
@@ -58,8 +60,8 @@ _HOMES = {
     "check_reference": "stl_lfd.sim.safety",
     "Scene": "stl_lfd.sim.scene",
     "KinematicBackend": "stl_lfd.sim.kinematic",
-    "Execution": "stl_lfd.sim.tracking",
-    "TrackingModel": "stl_lfd.sim.tracking",
+    "Execution": "stl_lfd.sim.tracking_model",
+    "TrackingModel": "stl_lfd.sim.tracking_model",
     "builtin_scenes": "stl_lfd.sim.scene_file",
     "load_scene": "stl_lfd.sim.scene_file",
 }

@@ -8,7 +8,7 @@ import pytest
 from stl_lfd.optim import finish_run, load_task, resume_run, start_run
 from stl_lfd.optim.loop import run_remaining_trials, search_method
 from stl_lfd.optim.methods.base import Planner, Problem, Request
-from stl_lfd.optim.methods.planning import Plan
+from stl_lfd.optim.methods.plan_model import Plan
 from stl_lfd.optim.methods.tuning import PlanSettings
 from stl_lfd.optim.placements import spec_composition
 from stl_lfd.optim.settings import Optimizer

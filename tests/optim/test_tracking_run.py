@@ -11,7 +11,7 @@ from scipy.signal import lfilter
 import stl_lfd.optim.objective as objective_module
 from stl_lfd.errors import RunError
 from stl_lfd.optim import finish_run, load_task, resume_run, start_run
-from stl_lfd.optim.tracking import FOLLOWS_THE_PLAN, TRACKING_FILE, read_tracking, used
+from stl_lfd.optim.tracking_fit import FOLLOWS_THE_PLAN, TRACKING_FILE, read_tracking, used
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.backend import Capabilities
 from stl_lfd.sim.kinematic import KinematicBackend
@@ -89,7 +89,7 @@ def test_a_sagging_robot_is_learned_and_a_resumed_run_proposes_the_same(tmp_path
 
 
 def test_plans_go_through_the_model_only_where_the_robot_departs_from_them():
-    from stl_lfd.sim.tracking import TrackingModel
+    from stl_lfd.sim.tracking_model import TrackingModel
 
     assert not used(TrackingModel(plan_rms_=np.array([0.3, 0.2, 0.9]) * FOLLOWS_THE_PLAN))  # PyBullet: hundredths of a mm
     assert used(TrackingModel(kind_="offset", plan_rms_=np.array([0.0, 0.0, 2.0]) * FOLLOWS_THE_PLAN))
@@ -103,7 +103,7 @@ def test_a_backend_that_plays_the_plan_learns_no_tracking(tmp_path, learned_mode
 
 
 def test_a_model_that_is_the_plan_is_not_used_however_far_the_robot_strays():
-    from stl_lfd.sim.tracking import TrackingModel
+    from stl_lfd.sim.tracking_model import TrackingModel
 
     assert not used(TrackingModel(kind_="plan", plan_rms_=np.array([0.0, 0.0, 2.0]) * FOLLOWS_THE_PLAN))  # noise alone
 

@@ -9,7 +9,7 @@ import pytest
 import stl_lfd.rotations as rotations
 from stl_lfd.errors import ExecutionError
 from stl_lfd.sim import Reference, TrackingWarning, execute, load_scene
-from stl_lfd.sim.grasp import GraspModel
+from stl_lfd.sim.grasp_model import GraspModel
 
 SCENE = load_scene("pick_insert")
 GRASP = np.array([0.45, -0.25, 0.11])

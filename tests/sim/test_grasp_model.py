@@ -8,8 +8,8 @@ import pytest
 
 import stl_lfd.rotations as rotations
 from stl_lfd.sim import execute, load_scene
-from stl_lfd.sim.grasp import GraspModel, InHand, carried_poses
-from stl_lfd.sim.tracking import PredictingBackend, TrackingModel
+from stl_lfd.sim.grasp_model import GraspModel, InHand, carried_poses
+from stl_lfd.sim.tracking_model import PredictingBackend, TrackingModel
 from tests.sim.test_outcome import carry_into_hole
 
 SCENE = load_scene("pick_insert")
@@ -66,7 +66,7 @@ def test_the_model_survives_json():
 
 
 def test_method_plan_predicts_through_a_grasp_that_is_not_rigid_even_when_the_arm_follows_the_plan():
-    from stl_lfd.optim.tracking import used
+    from stl_lfd.optim.tracking_fit import used
 
     rigid = GraspModel().fit([carried()], SCENE)
     moved = GraspModel().fit([carried({"shaft": InHand(rigid.in_hand_["shaft"].position + [0.0, 0.0, 0.004], rigid.in_hand_["shaft"].orientation)})], SCENE)

@@ -6,7 +6,7 @@ import pytest
 from scipy.signal import lfilter
 
 from stl_lfd.sim import Reference, load_scene
-from stl_lfd.sim.tracking import Execution, PredictingBackend, TrackingModel
+from stl_lfd.sim.tracking_model import Execution, PredictingBackend, TrackingModel
 
 RATE = 100.0
 

@@ -31,7 +31,7 @@ from torch.quasirandom import SobolEngine
 from stl_lfd.optim.methods.base import Proposal, Request, SearchMethod, from_unit, to_unit
 from stl_lfd.optim.methods.composition import compose, through_routes
 from stl_lfd.optim.methods.gp import single_threaded
-from stl_lfd.optim.methods.planning import Plan, Scorer, difference_posterior
+from stl_lfd.optim.methods.plan_model import Plan, Scorer, difference_posterior
 from stl_lfd.optim.methods.tuning import PlanSettings
 from stl_lfd.optim.trials import Trial, part_observations
 

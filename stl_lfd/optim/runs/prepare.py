@@ -26,7 +26,7 @@ from stl_lfd.optim.runs.store import RunStore
 from stl_lfd.optim.space import SearchSpace
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Overrides, Task
-from stl_lfd.optim.tracking import TRACKING_FILE, RunTracking
+from stl_lfd.optim.tracking_fit import TRACKING_FILE, RunTracking
 from stl_lfd.optim.trials import Outcome, Trial
 from stl_lfd.signals import SignalTable
 from stl_lfd.stl import ast

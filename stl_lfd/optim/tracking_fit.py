@@ -1,5 +1,5 @@
 """A run's tracking model: how its robot followed the references of the trials executed so far
-(`stl_lfd.sim.tracking`), so that method `plan` scores a candidate by its predicted execution.
+(`stl_lfd.sim.tracking_model`), so that method `plan` scores a candidate by its predicted execution.
 
 The executions are the unoptimised skill's and the finished trials': each trial's reference is
 rebuilt from its point (the plan is a pure function of the point) and its positions are read
@@ -24,8 +24,8 @@ from stl_lfd.optim.objective import SkillObjective
 from stl_lfd.optim.space import SearchSpace
 from stl_lfd.optim.trials import Trial
 from stl_lfd.signals import SignalTable
-from stl_lfd.sim.grasp import GraspModel, InHand, carried_poses
-from stl_lfd.sim.tracking import Execution, TrackingModel
+from stl_lfd.sim.grasp_model import GraspModel, InHand, carried_poses
+from stl_lfd.sim.tracking_model import Execution, TrackingModel
 
 TRACKING_FILE = "tracking.json"
 # Below this departure from the plan (m, RMS per axis over the executions so far) the plan is

@@ -28,7 +28,7 @@ from scipy.signal import lfilter
 
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.backend import Capabilities
-from stl_lfd.sim.grasp import GraspModel
+from stl_lfd.sim.grasp_model import GraspModel
 from stl_lfd.sim.kinematic import KinematicBackend
 from stl_lfd.sim.reference import Reference, Rollout, recording_times
 from stl_lfd.sim.scene import Scene
