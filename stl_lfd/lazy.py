@@ -1,4 +1,5 @@
-"""Package attributes loaded on first use, so that importing a package stays cheap."""
+"""Package attributes and registered classes loaded on first use, so that importing a package
+(or naming what a registry holds) stays cheap."""
 
 from __future__ import annotations
 
@@ -26,3 +27,11 @@ def lazy_exports(package: str, homes: dict[str, str], namespace: dict[str, Any])
         return sorted(set(namespace) | set(homes))
 
     return sorted(homes), __getattr__, __dir__
+
+
+def loaded(target: str | Any) -> Any:
+    """The attribute a `module:Name` string names, imported now; anything else as it is."""
+    if not isinstance(target, str):
+        return target
+    module, _, attribute = target.partition(":")
+    return getattr(import_module(module), attribute)

@@ -5,7 +5,7 @@ optimiser, so that the settings can check a method's name without importing the 
 
 from __future__ import annotations
 
-from importlib import import_module
+from stl_lfd.lazy import loaded
 
 REGISTRY: dict[str, str | type] = {
     "stl": "stl_lfd.optim.methods.stl:CompositeSearch",
@@ -51,8 +51,5 @@ def settings_class(name: str) -> type | None:
 
 
 def _resolved(registry: dict[str, str | type], name: str) -> type:
-    entry = registry[name]
-    if isinstance(entry, str):
-        module, _, attribute = entry.partition(":")
-        entry = registry[name] = getattr(import_module(module), attribute)
-    return entry
+    registry[name] = loaded(registry[name])
+    return registry[name]

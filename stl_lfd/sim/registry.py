@@ -19,10 +19,10 @@ choices, loads no simulator.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from importlib import import_module
 from typing import TYPE_CHECKING
 
 from stl_lfd.errors import ConfigError, ExecutionError
+from stl_lfd.lazy import loaded
 from stl_lfd.spelling import spelled
 
 if TYPE_CHECKING:
@@ -38,10 +38,8 @@ class Entry:
     summary: str
 
     def load(self) -> "type[Backend]":
-        if isinstance(self.target, str):
-            module, _, attribute = self.target.partition(":")
-            self.target = getattr(import_module(module), attribute)
-        return self.target  # type: ignore[return-value]
+        self.target = loaded(self.target)
+        return self.target
 
 
 REGISTRY: dict[str, Entry] = {
