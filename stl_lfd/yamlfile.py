@@ -160,6 +160,13 @@ def integer(value: Any, path: Path | str, key: str, minimum: int | None = None, 
     return value
 
 
+def truth(value: Any, path: Path | str, key: str) -> bool:
+    """`value` when it is true or false, with a ConfigError naming `key` otherwise."""
+    if not isinstance(value, bool):
+        raise ConfigError(f"{path}: '{key}' must be true or false (got {shown(value)})")
+    return value
+
+
 def vector(value: Any, length: int, path: Path | str, key: str) -> tuple[float, ...]:
     """`value` as a tuple of `length` finite floats."""
     if not isinstance(value, (list, tuple)) or len(value) != length:
@@ -169,8 +176,8 @@ def vector(value: Any, length: int, path: Path | str, key: str) -> tuple[float, 
 
 def settings_from_yaml(defaults: Any, data: Any, path: Path | str, where: str) -> Any:
     """A copy of the frozen dataclass `defaults` with the fields `data` sets: whole numbers of at
-    least 1 where the default is an int, numbers of at least 0 where it is a float, lists of
-    such numbers for tuples, and nested dataclasses the same way."""
+    least 1 where the default is an int, true or false where it is a bool, numbers of at least 0
+    where it is a float, lists of such numbers for tuples, and nested dataclasses the same way."""
     item = check_keys(data, [entry.name for entry in fields(defaults)], path, where)
     values = {}
     for name, value in item.items():
@@ -181,6 +188,8 @@ def settings_from_yaml(defaults: Any, data: Any, path: Path | str, where: str) -
             if not isinstance(value, list) or not value:
                 raise ConfigError(f"{path}: '{key}' must be a non-empty list of numbers (got {shown(value)})")
             values[name] = tuple(number(entry, path, f"{key}[{index}]", minimum=0.0) for index, entry in enumerate(value))
+        elif isinstance(default, bool):
+            values[name] = truth(value, path, key)
         elif isinstance(default, int):
             values[name] = integer(value, path, key, minimum=1)
         else:

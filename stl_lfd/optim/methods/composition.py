@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from typing import Callable
 
+import numpy as np
 import torch
 from botorch.acquisition import AcquisitionFunction
 from torch.quasirandom import SobolEngine
@@ -30,7 +31,9 @@ class ComposedLogEI(AcquisitionFunction):
     (softplus with temperature `0.01 scale`) and averaged in log space, so that the acquisition
     keeps a gradient far from improvement. The model's outputs after the first `parts` are
     routes: output `parts + k` implies part `route_parts[k]`, whose sample is raised to the
-    route's where that is larger. With `features`, the model's inputs are `features(X)`.
+    route's where that is larger. With `features`, the model's inputs are `features(X)`; with
+    `scales` (`m + r`, `balance.output_scales`), each output's samples are divided by its scale
+    before they are composed (`best` then is on that scale too).
     """
 
     def __init__(
@@ -45,16 +48,20 @@ class ComposedLogEI(AcquisitionFunction):
         groups: int = 1,
         route_parts: tuple[int, ...] = (),
         features: Callable | None = None,
+        scales: np.ndarray | None = None,
     ) -> None:
         super().__init__(model)
         self.posterior, self.best, self.temperature = posterior, best, 0.01 * scale
         self.semantics, self.parts, self.groups, self.route_parts = semantics, parts, groups, route_parts
         self.normal = qmc_normals(parts + len(route_parts), seed)  # S x (m + r)
         self.encode = features if features is not None else (lambda points: points)
+        self.scales = None if scales is None else torch.as_tensor(scales, dtype=torch.float64)
 
     def forward(self, X: torch.Tensor) -> torch.Tensor:  # b x 1 x d -> b
         mean, std = self.posterior(self.encode(X[..., 0, :]))  # b x (m + r) each
         samples = mean.unsqueeze(-2) + std.unsqueeze(-2) * self.normal  # b x S x (m + r)
+        if self.scales is not None:
+            samples = samples / self.scales
         samples = through_routes(samples, self.parts, self.route_parts)  # b x S x m
         return log_soft_improvement(compose(samples, self.semantics, self.groups), self.best, self.temperature)
 
@@ -107,3 +114,10 @@ def compose(values: torch.Tensor, semantics: Semantics, groups: int = 1) -> torc
     positive = (values * torch.softmax(-nu * positive_relative, dim=-1)).sum(dim=-1)
     minimum = minimum[..., 0]
     return torch.where(minimum > 0, positive, torch.where(minimum < 0, negative, torch.zeros_like(minimum)))
+
+
+def balanced_values(outputs: np.ndarray, scales: np.ndarray, parts: int, route_parts: tuple[int, ...], semantics: Semantics, groups: int = 1) -> np.ndarray:
+    """`n x (m + r)` observed outputs -> `n` composed values, each output divided by its scale
+    first and each part raised to its routes' (as the acquisition composes its samples)."""
+    samples = through_routes(torch.as_tensor(np.asarray(outputs, dtype=float) / scales), parts, route_parts)
+    return compose(samples, semantics, groups).numpy()

@@ -29,7 +29,8 @@ import torch
 from torch.quasirandom import SobolEngine
 
 from stl_lfd.optim.methods.base import Proposal, Request, SearchMethod, from_unit, to_unit
-from stl_lfd.optim.methods.composition import compose, through_routes
+from stl_lfd.optim.methods.balance import output_scales
+from stl_lfd.optim.methods.composition import balanced_values, compose, through_routes
 from stl_lfd.optim.methods.gp import single_threaded
 from stl_lfd.optim.methods.plan_model import Plan, Scorer, difference_posterior
 from stl_lfd.optim.methods.tuning import PlanSettings
@@ -72,18 +73,29 @@ class PlanSearch(SearchMethod):
         with single_threaded():
             plan = self.plan_for(request.history)
             unit, tried = to_unit(X, bounds), to_unit(tried, bounds)
-            if design and len(tried):
-                return from_unit(self.spread_point(self.pool(request.seed), tried, plan), bounds)
             outputs = self.observed_outputs(succeeded)
+            scales = self.scales(outputs, plan, request.seed)
+            if design and len(tried):
+                return from_unit(self.spread_point(self.pool(request.seed), tried, plan, scales), bounds)
             difference = difference_posterior(unit, outputs - plan(unit) if len(X) else outputs, self.problem.features)
+            if scales is not None:
+                Y = balanced_values(outputs, scales, len(composition.names), composition.route_parts, composition.semantics, composition.groups)
             best = float(np.max(Y)) if len(Y) else -np.inf
             scale = float(np.std(Y)) if len(Y) > 1 and np.std(Y) > 0 else 1.0
-            score = Scorer(difference, plan, best, scale, composition, request.seed_for(index))
+            score = Scorer(difference, plan, best, scale, composition, request.seed_for(index), scales)
             candidates, values = self.search(score, unit[np.argmax(Y, keepdims=True)] if len(Y) else unit[:0], request.seed, request.seed_for(index))
             values = np.where(within(candidates, tried, 1e-9), -np.inf, values)  # a point already executed would teach nothing new
             if len(pending):
                 values = np.where(within(candidates, to_unit(pending, bounds), self.settings.pending_spread), -np.inf, values)
         return np.clip(from_unit(candidates[int(np.argmax(values))], bounds), bounds[0], bounds[1])
+
+    def scales(self, outputs: np.ndarray, plan: Plan, seed: int) -> np.ndarray | None:
+        """Each output's scale (`balance.output_scales`): the spread of the `n x o` observed
+        `outputs`, or before any trial of the plans over the pool; None without balancing, or
+        with a single output."""
+        if not self.settings.balance or outputs.shape[1] < 2:
+            return None
+        return output_scales(outputs if len(outputs) else plan(self.pool(seed)))
 
     def plan_for(self, history: Sequence[Trial]) -> Plan:
         """The plan of a point as the robot will execute it: through the tracking model learned
@@ -121,12 +133,12 @@ class PlanSearch(SearchMethod):
             raise ValueError("method plan needs every trial's parts (trials.jsonl 'components')")
         return np.hstack([values, routes])
 
-    def spread_point(self, pool: np.ndarray, tried: np.ndarray, plan: Plan) -> np.ndarray:
+    def spread_point(self, pool: np.ndarray, tried: np.ndarray, plan: Plan, scales: np.ndarray | None = None) -> np.ndarray:
         """The point of `pool` (`P x d`, unit cube) farthest from the `n x d` `tried` points among
         the untried ones whose `plan` satisfies the spec (or, when none is left, among the best
-        quarter by plan)."""
+        quarter by plan, its outputs divided by `scales`)."""
         composition = self.problem.composition
-        planned = plan(pool)
+        planned = plan(pool) / (scales if scales is not None else 1.0)
         samples = through_routes(torch.as_tensor(np.nan_to_num(planned, nan=-1e9)), len(composition.names), composition.route_parts)
         values = compose(samples, composition.semantics, composition.groups).numpy()
         values = np.where(np.isfinite(planned).all(axis=1), values, -np.inf)

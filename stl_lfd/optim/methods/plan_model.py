@@ -96,19 +96,23 @@ def difference_posterior(unit: np.ndarray, difference: np.ndarray, features: Cal
 class Scorer:
     """`b x d` unit points -> `b` acquisition values: the log expected improvement over `best`
     of the composed samples of plan + difference (as `composition.ComposedLogEI`), or the
-    composed mean before any trial (`best` = -inf); -inf where there is no plan."""
+    composed mean before any trial (`best` = -inf); -inf where there is no plan. With `scales`
+    (`o`), each output is divided by its scale before they are composed (`balance.py`)."""
 
-    def __init__(self, difference: Posterior, plan: Plan, best: float, scale: float, composition: Composition, seed: int) -> None:
+    def __init__(
+        self, difference: Posterior, plan: Plan, best: float, scale: float, composition: Composition, seed: int, scales: np.ndarray | None = None
+    ) -> None:
         self.difference, self.plan, self.best, self.temperature = difference, plan, best, 0.01 * scale
-        self.composition = composition
+        self.composition, self.scales = composition, scales
         self.normal = qmc_normals(len(composition.names) + len(composition.routes), seed)  # S x o
 
     def __call__(self, points: np.ndarray) -> np.ndarray:
         composition = self.composition
         planned = self.plan(points)  # b x o
         mean, std = self.difference(points)
-        centre = torch.as_tensor(planned + mean, dtype=torch.float64)
-        spread = torch.as_tensor(std, dtype=torch.float64)
+        divisor = self.scales if self.scales is not None else 1.0
+        centre = torch.as_tensor((planned + mean) / divisor, dtype=torch.float64)
+        spread = torch.as_tensor(std / divisor, dtype=torch.float64)
         samples = through_routes(centre.unsqueeze(-2) + spread.unsqueeze(-2) * self.normal, len(composition.names), composition.route_parts)
         composed = compose(torch.nan_to_num(samples, nan=-1e9), composition.semantics, composition.groups)  # b x S
         values = composed.mean(dim=-1) if not math.isfinite(self.best) else log_soft_improvement(composed, self.best, self.temperature)

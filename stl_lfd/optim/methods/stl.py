@@ -15,11 +15,13 @@ the M initial trials are handed out without it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from stl_lfd.optim.methods.balance import output_scales
 from stl_lfd.optim.methods.base import Composition, Proposal, Request, SobolStart, from_unit, sobol_points, to_unit
+from stl_lfd.optim.methods.composition import balanced_values
 from stl_lfd.optim.methods.gp import fit_multi_output_gp, maximise_acquisition, single_threaded
 from stl_lfd.optim.methods.trust_region import trust_box, trust_region_length
 from stl_lfd.optim.methods.tuning import CompositeSettings
@@ -37,10 +39,23 @@ class PartsData:
     semantics: Semantics
     groups: int = 1
     route_parts: tuple[int, ...] = ()
+    scales: np.ndarray | None = None  # each output's scale (`balance`), None: as recorded
 
     @property
     def outputs(self) -> np.ndarray:
         return np.hstack([self.parts, self.routes])
+
+    def balanced(self) -> "PartsData":
+        """The same data with each output's scale (`balance.output_scales`) when there are
+        several outputs to weigh against each other."""
+        return replace(self, scales=output_scales(self.outputs)) if self.outputs.shape[1] > 1 else self
+
+    def composed(self, Y: np.ndarray) -> np.ndarray:
+        """`n` values the search compares trials by: their robustness `Y`, or with scales the
+        composition of their balanced outputs (of the same sign)."""
+        if self.scales is None:
+            return Y
+        return balanced_values(self.outputs, self.scales, self.parts.shape[1], self.route_parts, self.semantics, self.groups)
 
     @classmethod
     def observed(cls, history: list[Trial], composition: Composition | None, Y: np.ndarray) -> "PartsData":
@@ -70,11 +85,13 @@ class CompositeSearch(SobolStart):
     def search(self, request: Request, X: np.ndarray, Y: np.ndarray) -> list[Proposal]:
         batch: list[Proposal] = []
         pending = request.pending
+        data = PartsData.observed(list(request.history), self.problem.composition, Y)
+        data = data.balanced() if self.settings.balance else data
+        Y = data.composed(Y)
         if self.stalled(request.history, Y):
             batch.append((sobol_points(self.problem.bounds, request.first + 1, request.seed)[request.first], "explore"))
             pending = np.vstack([pending, batch[0][0]])
         if request.count > len(batch):
-            data = PartsData.observed(list(request.history), self.problem.composition, Y)
             points = self.composite_points(X, data, Y, request.count - len(batch), pending, request.seed_for(len(request.history)))
             batch += [(point, "stl") for point in points]
         return batch
@@ -96,7 +113,8 @@ class CompositeSearch(SobolStart):
 
     def composite_points(self, X: np.ndarray, data: PartsData, Y: np.ndarray, count: int, pending: np.ndarray, seed: int) -> np.ndarray:
         """`count x d` points: each maximises the composed log EI with the earlier ones and
-        `p x d` `pending` points as if observed at their posterior mean (same hyperparameters).
+        `p x d` `pending` points as if observed at their posterior mean (same hyperparameters);
+        `Y`: the `n` values the search compares trials by (`PartsData.composed`).
 
         With routes, while the spec is violated the search spans the whole box, not the trust
         region (a part's own robustness may lead away from where a route is close to holding),
@@ -125,7 +143,7 @@ class CompositeSearch(SobolStart):
                     posterior = PartsPosterior(model).with_pending(encode(torch.as_tensor(np.array(executing + chosen), dtype=torch.float64)))
                 acquisition = ComposedLogEI(
                     model, posterior, float(np.max(Y)), float(np.std(Y)) or 1.0, data.semantics, data.parts.shape[1], seed + index,
-                    data.groups, data.route_parts, self.problem.features,
+                    data.groups, data.route_parts, self.problem.features, data.scales,
                 )  # fmt: skip
                 starts = None if anchors is None else anchored_starts(acquisition, anchors, box, seed + index, settings)
                 chosen.append(maximise_acquisition(acquisition, box, settings.restarts, settings.raw_samples, seed + index, starts=starts))

@@ -57,6 +57,8 @@ class CompositeSettings:
         stall_gain, stall_trials: an improvement below `stall_gain` of the distance to
             satisfaction is a stall; after `stall_trials` in a row, a space-filling trial.
         region: the trust region.
+        balance: compose the parts and routes each on its own scale (`balance.py`), so that
+            the units of the spec's predicates do not steer the search; false: as recorded.
     """
 
     restarts: int = 4
@@ -66,6 +68,7 @@ class CompositeSettings:
     stall_gain: float = 0.1
     stall_trials: int = 2
     region: TrustRegion = field(default_factory=TrustRegion)
+    balance: bool = True
 
 
 @dataclass(frozen=True)
@@ -87,9 +90,12 @@ class PlanSettings:
         first_rounds: the first trial's search, chosen by the plan alone (once per run).
         rounds: later trials' search, kept cheap (40 plans): the trials' history carries it on.
         pending_spread: no point of a batch this close (unit cube, any coordinate) to another.
+        balance: compose the parts and routes each on its own scale (`balance.py`): before a
+            trial, their plans' spread over the pool; after, the spread of the trials' values.
     """
 
     pool: int = 128
     first_rounds: Rounds = field(default_factory=lambda: Rounds((0.1, 0.04, 0.015, 0.006), 4, 8))
     rounds: Rounds = field(default_factory=lambda: Rounds((0.08, 0.02), 3, 5))
     pending_spread: float = 0.05
+    balance: bool = True
