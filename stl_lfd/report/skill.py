@@ -2,9 +2,23 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse
+
+from stl_lfd.files import atomic_output
+from stl_lfd.hsmm import LearnedSkill, retrieve
+
+
+def write_skill_figure(skill: LearnedSkill, path: Path) -> None:
+    """Draw `skill_figure` of a skill `stlopt learn` learned (as its demonstrations show it)
+    into `path`."""
+    shown, model = skill.shown, skill.model
+    figure = skill_figure(skill.sequences, shown.means_, shown.covars_, retrieve(shown).positions, model.sample_period_, model.signal_names_)
+    with atomic_output(path) as temporary:
+        figure.savefig(temporary, dpi=110)
 
 
 def skill_figure(
