@@ -12,6 +12,7 @@ import time
 from rich.console import Console
 
 from stl_lfd.optim.runs.prepare import PreparedRun
+from stl_lfd.optim.runs.recorder import finish_run
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.trials import Trial
 from stl_lfd.spelling import spelled
@@ -97,6 +98,18 @@ class TrialPrinter:
             f"best: trial {summary.best_trial}, robustness {best:+.5f} ({_verdict(summary.satisfied)}; "
             f"unoptimised {summary.initial_robustness:+.5f}); {summary.trials} trials in {summary.wall_seconds:.1f} s"
         )
+
+
+def finish_printed(prepared: PreparedRun, quiet: bool = False, ray: str | None = None) -> Summary:
+    """`finish_run` shown on stderr by a `TrialPrinter` (with `quiet`, no line per trial);
+    returns the final summary."""
+    printer = TrialPrinter(prepared, quiet=quiet)
+    try:
+        summary = finish_run(prepared, printer.trial, ray=ray)
+    finally:
+        printer.stop()
+    printer.done(summary)
+    return summary
 
 
 def _verdict(satisfied: bool) -> str:

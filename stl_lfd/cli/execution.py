@@ -16,10 +16,8 @@ from stl_lfd.cli.options import (
     CommandOption,
     CommandTimeoutOption,
     SemanticsOption,
-    check_command_for,
     check_duration_and_rate,
     command_of,
-    whole_seconds,
 )
 from stl_lfd.cli.program import PlainUsage, app, progress_bar, user_errors
 from stl_lfd.errors import ExecutionError
@@ -50,37 +48,20 @@ def rollout(
         stlopt rollout three_regions.npz | stlopt robustness specs/phi1.stl -
         stlopt rollout configs/behaviours/pick_insert.yaml --place holder=.6,.25
     """
-    import time
-
     from stl_lfd.files import check_output_file
     from stl_lfd.signals import write_signal_csv
-    from stl_lfd.skill import PlacedSkill
+    from stl_lfd.skill import PlacedSkill, timed_rollout
 
     with user_errors():
         check_duration_and_rate(duration, rate)
         if output is not None:
             check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
-        from stl_lfd.sim import BackendOptions, new_backend
-
         skill = PlacedSkill.load(model_file, scene, place, duration)
         reference = skill.reference()
         executor = command_of(command, command_timeout, None)
-        check_command_for(backend.value, executor)
-        with new_backend(backend.value, BackendOptions(command=executor)) as runner:
-            capabilities = runner.capabilities
-            start = time.perf_counter()
-            if capabilities.simulates and reference.duration > LONG_ROLLOUT_SECONDS:
-                with progress_bar(f"simulating {reference.duration:.0f} s", int(reference.duration)) as advance:
-                    result = skill.execute(runner, rate, whole_seconds(advance), reference)
-            else:
-                result = skill.execute(runner, rate, reference=reference)
-            elapsed = time.perf_counter() - start
+        result, how = timed_rollout(skill, backend.value, rate, executor, reference, progress=progress_bar)
         write_signal_csv(result.signals, output if output is not None else sys.stdout)
-    how = capabilities.describe_rollout(result.signals.duration, elapsed, result.tracking_rms, result.tracking_max)
     print(f"{backend.value} rollout in {skill.scene.name}: {how}" + (f"; wrote {output}" if output is not None else ""), file=sys.stderr)
-
-
-LONG_ROLLOUT_SECONDS = 120.0  # simulated seconds from which a rollout shows a progress bar
 
 
 @app.command(cls=PlainUsage)

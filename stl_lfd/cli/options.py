@@ -67,26 +67,6 @@ def placements_of(scene_name: str, place: list[str]):
     return (placement_from_options(load_scene(scene_name), place),)
 
 
-def check_command_for(backend: str, command) -> None:
-    """ConfigError when --command is given for a backend that runs no command."""
-    from stl_lfd.sim import backend_class
-
-    if command is not None and not backend_class(backend).capabilities.needs_command:
-        raise ConfigError(f"--command is for --backend command (the run's backend is {backend})")
-
-
-def whole_seconds(advance):
-    """A simulation observer that reports progress once per simulated second."""
-    shown = [-1]
-
-    def observe(time: float, world: object) -> None:
-        if int(time) != shown[0]:
-            shown[0] = int(time)
-            advance(shown[0])
-
-    return observe
-
-
 def check_duration_and_rate(duration: Optional[float], rate: float) -> None:
     from stl_lfd.limits import samples_problem
 

@@ -32,6 +32,7 @@ SPELLINGS = {
     "min_spread": "--min-spread",
     "model": "--model",
     "out": "--out",
+    "output": "-o",
     "place": "--place",
     "placements": "--place",
     "port": "--port",
@@ -130,6 +131,11 @@ def one_blas_thread() -> None:
     on two cores, a third of a small `stlopt robustness`). Too late once numpy is loaded."""
     if "numpy" not in sys.modules:
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
+def to_stderr(message: str) -> None:
+    """Print a note for the user on stderr (what a command hands the library to say as it goes)."""
+    print(message, file=sys.stderr)
 
 
 def print_table(header: list[str], rows: list[list[str]]) -> None:

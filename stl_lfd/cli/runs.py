@@ -6,7 +6,7 @@ import json
 import shlex
 import sys
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Callable, Optional
 
 import typer
 
@@ -19,12 +19,15 @@ from stl_lfd.cli.options import (
     IterationsOption,
     MethodOption,
     SeedOption,
-    check_command_for,
     command_of,
     placements_of,
 )
-from stl_lfd.cli.program import PlainUsage, app, print_table, progress_bar, user_errors
-from stl_lfd.errors import ConfigError
+from stl_lfd.cli.program import PlainUsage, app, print_table, progress_bar, to_stderr, user_errors
+
+if TYPE_CHECKING:
+    from stl_lfd.optim.runs.asktell import Asked, Told
+    from stl_lfd.optim.runs.sweep import CellResult
+    from stl_lfd.optim.trials import Trial
 
 
 @app.command(cls=PlainUsage)
@@ -82,41 +85,28 @@ def optimize(
         stlopt optimize --spec specs/phi2.stl
         stlopt optimize --spec my.stl --demos demos/three_regions
     """
-    from stl_lfd.optim import Overrides, finish_run, resume_run, start_run
+    from stl_lfd.optim import Overrides, open_run
     from stl_lfd.optim.default_task import task_to_run
-    from stl_lfd.optim.inputs import resolve
-    from stl_lfd.optim.runs.resume import inputs_record
-    from stl_lfd.progress import TrialPrinter
+    from stl_lfd.progress import finish_printed
 
     with user_errors():
-        file_task = task_to_run(task_file, spec, demos, model, say=lambda message: print(message, file=sys.stderr))
+        file_task = task_to_run(task_file, spec, demos, model, say=to_stderr)
         given = Overrides(
             spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None,
             workers=workers, command=command_of(command, command_timeout, file_task.command), placements=placements_of(file_task.scene, place),
         )  # fmt: skip
         run_dir = out or Path("runs") / file_task.name
-        if ray is not None:
-            from stl_lfd.optim.runs.ray_workers import connect
-
-            connect(ray, watch=True)  # before the run starts: a cluster that cannot be reached leaves nothing behind
-        if resume:
-            prepared = resume_run(run_dir, iterations, file_task, given)
-        else:
-            task = given.applied_to(file_task)
-            check_command_for(task.backend, given.command)
-            say = (lambda message: None) if quiet else (lambda message: print(message, file=sys.stderr))
-            resolved = resolve(task)
-            prepared = start_run(resolved, run_dir, say, inputs_record(file_task, given, resolved))
-    skill = "".join(f" {option} {path}" for option, path in (("--demos", demos), ("--model", model)) if path is not None)
-    again = f"stlopt optimize {task_file or f'--spec {spec}{skill}'} --out {run_dir} --resume"
+        prepared = open_run(file_task, given, run_dir, resume, (lambda message: None) if quiet else to_stderr, ray, watch_head=True)
+    again = _optimize_again(task_file, spec, demos, model, run_dir)
     with prepared, user_errors(on_interrupt=f"interrupted; the finished trials are kept. Continue with: {again}"):
-        printer = TrialPrinter(prepared, quiet=quiet)
-        try:
-            summary = finish_run(prepared, printer.trial, ray=ray)
-        finally:
-            printer.stop()
-        printer.done(summary)
+        summary = finish_printed(prepared, quiet, ray)
     print(json.dumps(summary.to_json(), indent=2))
+
+
+def _optimize_again(task_file: Optional[Path], spec: Optional[Path], demos: Optional[Path], model: Optional[Path], run_dir: Path) -> str:
+    """The command that continues an interrupted `stlopt optimize`."""
+    skill = "".join(f" {option} {path}" for option, path in (("--demos", demos), ("--model", model)) if path is not None)
+    return f"stlopt optimize {task_file or f'--spec {spec}{skill}'} --out {run_dir} --resume"
 
 
 @app.command(cls=PlainUsage)
@@ -150,31 +140,24 @@ def ask(
         stlopt ask runs/robot
         stlopt ask runs/lab --robot left
     """
-    from stl_lfd.optim import Overrides, load_task
-    from stl_lfd.optim.inputs import resolve
-    from stl_lfd.optim.runs.asktell import ask as ask_trial
-    from stl_lfd.optim.runs.asktell import ask_new
-    from stl_lfd.optim.runs.pending import still_out
-    from stl_lfd.optim.runs.resume import inputs_record
+    from stl_lfd.optim import Overrides
+    from stl_lfd.optim.runs.targets import ask_run
 
     given = Overrides(spec=spec, seed=seed, initial=init, trials=iterations, method=method.value if method else None, workers=workers)
-
-    def refused(trial) -> None:
-        print(f"trial {trial.trial} refused: {trial.error}", file=sys.stderr)
-
     with user_errors():
-        if target.is_dir():
-            if out is not None or set(given.given()) - {"trials"}:
-                raise ConfigError(f"{target}: a run directory keeps its own settings; only --iterations may be given with it")
-            run_dir, asked = target, ask_trial(target, iterations, on_refused=refused, robot=robot)
-        else:
-            file_task = load_task(target)
-            run_dir = out or Path("runs") / file_task.name
-            if run_dir.is_dir() and any(run_dir.iterdir()):
-                asked = ask_trial(run_dir, iterations, file_task, given, on_refused=refused, robot=robot)
-            else:
-                resolved = resolve(given.applied_to(file_task))
-                asked = ask_new(resolved, run_dir, inputs_record(file_task, given, resolved), lambda message: print(message, file=sys.stderr))
+        run_dir, asked = ask_run(target, out, given, on_refused=_print_refused, robot=robot, learn_progress=to_stderr)
+    _print_asked(run_dir, asked, robot)
+
+
+def _print_refused(trial: Trial) -> None:
+    print(f"trial {trial.trial} refused: {trial.error}", file=sys.stderr)
+
+
+def _print_asked(run_dir: Path, asked: Optional[Asked], robot: str) -> None:
+    """The reference to execute on stdout, and on stderr what it is and what to do next (or
+    that the run has all its trials)."""
+    from stl_lfd.optim.runs.pending import still_out
+
     if asked is None:
         out = still_out(run_dir)
         done = (
@@ -215,7 +198,6 @@ def tell(
     """
     from stl_lfd.optim.runs.asktell import ABANDONED
     from stl_lfd.optim.runs.asktell import tell as tell_trial
-    from stl_lfd.optim.runs.pending import handed_out
 
     if sum([signals is not None, failed is not None, abandon]) != 1:  # mistakes in the command line itself: usage, exit 2
         context.fail("give the signals CSV of the pending trial, --failed REASON or --abandon (one of them)")
@@ -223,6 +205,14 @@ def tell(
         context.fail("--failed needs a reason, such as --failed 'protective stop at t = 4 s'")
     with user_errors():
         told = tell_trial(run_dir, signals, ABANDONED if abandon else failed, trial)
+    _print_told(told, run_dir, as_json)
+
+
+def _print_told(told: Told, run_dir: Path, as_json: bool) -> None:
+    """The robustness (or with `as_json`, one JSON object) on stdout; on stderr the trial's
+    outcome, whether it waits for trials handed out before it, the best so far and what is left."""
+    from stl_lfd.optim.runs.pending import handed_out
+
     summary = told.summary
     number = told.trial.trial if told.trial is not None else 0
     if as_json:
@@ -264,37 +254,35 @@ def sweep(
         stlopt sweep sweeps/phi1_methods.yaml --jobs 2
         stlopt sweep sweeps/phi1_methods.yaml --ray auto
     """
-    from stl_lfd.files import check_output_folder
-    from stl_lfd.optim.runs.sweep import local_results, ray_results, run_sweep
-    from stl_lfd.optim.runs.sweep_file import load_sweep
+    from stl_lfd.optim.runs.sweep import cell_results, open_sweep, run_sweep
     from stl_lfd.report.sweep import TABLE_HEADER, sweep_groups, table_rows, write_sweep_figure
 
     with user_errors():
-        plan = load_sweep(sweep_file)
-        folder = check_output_folder(out or Path("runs") / plan.name, "sweep folder")
-        if ray is not None:
-            from stl_lfd.optim.runs.ray_workers import connect
-
-            connect(ray, watch=True)  # before any cell: one line for a cluster that cannot be reached, or is lost
-        results = (lambda cells: ray_results(cells, ray)) if ray is not None else (lambda cells: local_results(cells, jobs))
+        plan, folder = open_sweep(sweep_file, out, ray, watch_head=True)
         again = f"stlopt sweep {sweep_file}" + (f" --out {out}" if out else "")
         with (
             progress_bar(f"sweep {plan.name}", len(plan.cells)) as advance,
             user_errors(on_interrupt=f"interrupted; finished cells are kept. Continue with: {again}"),
         ):
-
-            def finished(result, done: int, total: int) -> None:
-                advance(done)
-                if result is not None:
-                    record = result.record
-                    verdict = f"satisfied at trial {record['first_satisfied_trial']}" if record["satisfied"] else "not satisfied"
-                    best = f"{record['best_robustness']:+.5f}" if record["best_robustness"] is not None else "-"
-                    print(f"{result.name}: {verdict}, best {best} ({record['wall_seconds']:.0f} s)", file=sys.stderr)
-                elif done:
-                    print(f"{done} of {total} cells already done in {folder}", file=sys.stderr)
-
-            run_sweep(plan, folder, results, finished)
+            run_sweep(plan, folder, cell_results(jobs, ray), _cell_printer(advance, folder))
         figure = write_sweep_figure(folder)
         groups = sweep_groups(folder)
     print_table(TABLE_HEADER, table_rows(groups))
     print(f"wrote {folder / 'sweep.csv'} and {figure}", file=sys.stderr)
+
+
+def _cell_printer(advance: Callable[[int], None], folder: Path) -> Callable[[Optional[CellResult], int, int], None]:
+    """What a sweep shows as its cells finish: the progress bar, and a line per cell run now
+    (or one for the cells already done in the folder)."""
+
+    def finished(result: Optional[CellResult], done: int, total: int) -> None:
+        advance(done)
+        if result is not None:
+            record = result.record
+            verdict = f"satisfied at trial {record['first_satisfied_trial']}" if record["satisfied"] else "not satisfied"
+            best = f"{record['best_robustness']:+.5f}" if record["best_robustness"] is not None else "-"
+            print(f"{result.name}: {verdict}, best {best} ({record['wall_seconds']:.0f} s)", file=sys.stderr)
+        elif done:
+            print(f"{done} of {total} cells already done in {folder}", file=sys.stderr)
+
+    return finished

@@ -2,18 +2,19 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import sys
 from pathlib import Path
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Optional
 
 import typer
 
 from stl_lfd.cli.options import FIGURE_SUFFIXES, SIGNAL_SUFFIXES
 from stl_lfd.cli.program import PlainUsage, app, user_errors
-from stl_lfd.errors import ConfigError, ModelError
 from stl_lfd.limits import MAX_RESTARTS
+
+if TYPE_CHECKING:
+    from stl_lfd.hsmm import LearnedSkill
 
 
 @app.command(cls=PlainUsage)
@@ -67,67 +68,38 @@ def learn(
     move; --min-spread (auto) then widens every state to at least 5 mm and 5 degrees, and
     every duration to at least 10 % of its mean.
     """
-    from stl_lfd.files import check_output_file, check_output_folder
-    from stl_lfd.hsmm import demonstration_sets, summary_rows
+    from stl_lfd.files import check_output_file
+    from stl_lfd.hsmm import learn_skills, skill_files
     from stl_lfd.hsmm.spread import parse_min_spread
 
     with user_errors():
-        sets = demonstration_sets(demos_dir)
-        if sets:
-            if output is not None and output.suffix.lower() == ".npz":
-                raise ConfigError(
-                    f"-o {output}: {demos_dir} holds one folder per skill ({', '.join(path.name for path in sets)}); -o names the folder their models go into"
-                )
-            folder = check_output_folder(output if output is not None else Path("models"), "models folder")
-            targets = {path: folder / f"{path.name}.npz" for path in sets}
-        else:
-            targets = {demos_dir: check_output_file(output if output is not None else Path("model.npz"), (".npz",), "model file")}
+        files = skill_files(demos_dir, output)
         if plot is not None:
             check_output_file(plot, FIGURE_SUFFIXES, "figure")
         chosen = [name.strip() for name in frames.split(",")] if frames is not None else None
-        floor = parse_min_spread(min_spread)
-        learned = [_learned_skill(path, states, sample_period, chosen, restarts, floor) for path in targets]  # all, before any is written
-        for (path, target), skill in zip(targets.items(), learned):
-            if sets:
-                target.parent.mkdir(parents=True, exist_ok=True)
-                print(f"# {path.name}")
-            _write_skill(skill, target, _skill_plot(plot, path.name) if sets else plot)
-            _print_summary(summary_rows(skill.shown), skill.model.signal_names_)
-            _report_learned(skill, target, states)
+        learned = learn_skills(files, states, sample_period, chosen, restarts, parse_min_spread(min_spread))  # all, before any is written
+        for skill in learned:
+            _write_and_show(skill, plot, states)
 
 
-@dataclasses.dataclass(frozen=True)
-class _LearnedSkill:
-    model: Any  # HSMM or TPHSMM
-    sequences: list
-    shown: Any  # the model as its demonstrations show it (a TP-HSMM at their first poses)
+def _write_and_show(skill: LearnedSkill, plot: Path | None, states: int) -> None:
+    """Write a learned skill's model file (and figure), print its states on stdout and what
+    was written on stderr; with several skills, under the skill's name."""
+    from stl_lfd.hsmm import summary_rows
+
+    if skill.files.name:
+        print(f"# {skill.files.name}")
+    skill.save()
+    figure = skill.files.figure(plot)
+    if figure is not None:
+        from stl_lfd.report.figures.learned import write_skill_figure
+
+        write_skill_figure(skill, figure)
+    _print_summary(summary_rows(skill.shown), skill.model.signal_names_)
+    _report_learned(skill, states)
 
 
-def _learned_skill(folder: Path, states: int, sample_period: float | None, frames: list[str] | None, restarts: int, floor) -> _LearnedSkill:
-    from stl_lfd.hsmm import demonstrated_skill, learn_from_folder
-
-    model, sequences = learn_from_folder(folder, states, sample_period, frames, restarts, floor)
-    return _LearnedSkill(model, sequences, demonstrated_skill(model, folder))
-
-
-def _skill_plot(plot: Path | None, name: str) -> Path | None:
-    """PLOT-NAME.png beside `plot`, for one of several skills."""
-    return None if plot is None else plot.with_name(f"{plot.stem}-{name}{plot.suffix}")
-
-
-def _write_skill(skill: _LearnedSkill, output: Path, plot: Path | None) -> None:
-    from stl_lfd.hsmm import retrieve, save_model
-
-    save_model(skill.model, output)
-    if plot is not None:
-        from stl_lfd.report.figures import LEARNED_SKILL, SkillDrawing, save_figure
-
-        shown, model = skill.shown, skill.model
-        drawing = SkillDrawing(skill.sequences, shown.means_, shown.covars_, retrieve(shown).positions, model.sample_period_, model.signal_names_)
-        save_figure(LEARNED_SKILL.draw(drawing), plot, dpi=110)
-
-
-def _report_learned(skill: _LearnedSkill, output: Path, states: int) -> None:
+def _report_learned(skill: LearnedSkill, states: int) -> None:
     from stl_lfd.hsmm import TPHSMM
 
     model = skill.model
@@ -139,7 +111,7 @@ def _report_learned(skill: _LearnedSkill, output: Path, states: int) -> None:
             file=sys.stderr,
         )
     count = f"{len(skill.sequences)} demonstration{'s' if len(skill.sequences) != 1 else ''}"
-    print(f"wrote {output} ({count}, K = {states}{learned_in}, {len(model.monitor_.history)} EM iterations)", file=sys.stderr)
+    print(f"wrote {skill.files.model} ({count}, K = {states}{learned_in}, {len(model.monitor_.history)} EM iterations)", file=sys.stderr)
 
 
 def _print_summary(rows: list[dict], names: list[str]) -> None:
@@ -174,25 +146,13 @@ def retrieve(
         stlopt retrieve in.npz --frame shaft=.45,-.25,.08 --frame holder=.6,.2,.04
     """
     from stl_lfd.files import check_output_file
-    from stl_lfd.hsmm import frame_poses, load_model
-    from stl_lfd.hsmm import retrieve as retrieve_trajectory
-    from stl_lfd.rotations import QUATERNION_COLUMNS, ROTATION_COLUMNS
-    from stl_lfd.signals import SignalTable, write_signal_csv
+    from stl_lfd.hsmm import retrieve_file
+    from stl_lfd.signals import write_signal_csv
 
     with user_errors():
         if output is not None:
             check_output_file(output, SIGNAL_SUFFIXES, "signal CSV")
-        model = load_model(model_file)
-        poses = frame_poses(model, frame, model_file)
-        try:
-            trajectory = retrieve_trajectory(model, duration, rate, poses=poses)
-        except ModelError as error:
-            whose = "" if duration is not None else f" (its expected duration, {model.expected_duration():.3g} s)"
-            raise ModelError(f"{model_file}{whose}: {error}") from None
-        columns = {name: trajectory.positions[:, index] for index, name in enumerate(trajectory.signal_names) if name not in ROTATION_COLUMNS}
-        if trajectory.orientations is not None:
-            columns.update(zip(QUATERNION_COLUMNS, trajectory.orientations.T))
-        columns["state"] = trajectory.states + 1.0
-        write_signal_csv(SignalTable(trajectory.times, columns), output if output is not None else sys.stdout)
+        trajectory = retrieve_file(model_file, duration, rate, frame)
+        write_signal_csv(trajectory.signal_table(), output if output is not None else sys.stdout)
     if output is not None:
         print(f"wrote {output} ({trajectory.times.size} samples, {trajectory.times[-1]:.2f} s)", file=sys.stderr)

@@ -9,16 +9,21 @@ execution rates such as 240 Hz.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
 from stl_lfd.errors import ModelError
 from stl_lfd.hsmm import lqt
+from stl_lfd.hsmm.io import load_model
+from stl_lfd.hsmm.learn import frame_poses
 from stl_lfd.hsmm.model import HSMM
 from stl_lfd.hsmm.tp import TPHSMM
 from stl_lfd.limits import samples_problem
 from stl_lfd.poses import Pose
+from stl_lfd.rotations import QUATERNION_COLUMNS, ROTATION_COLUMNS
+from stl_lfd.signals import SignalTable
 
 # Control cost of the tracker relative to the state precisions; smaller tracks the means
 # more tightly, larger gives smoother, lazier motion.
@@ -46,6 +51,15 @@ class Trajectory:
     signal_names: list[str]
     orientations: np.ndarray | None = None
 
+    def signal_table(self) -> SignalTable:
+        """The trajectory as a signal table: the model's signals (the orientation as `qx, qy,
+        qz, qw`, not its `rx, ry, rz` columns) and `state`, the state followed (1-based)."""
+        columns = {name: self.positions[:, index] for index, name in enumerate(self.signal_names) if name not in ROTATION_COLUMNS}
+        if self.orientations is not None:
+            columns.update(zip(QUATERNION_COLUMNS, self.orientations.T))
+        columns["state"] = self.states + 1.0
+        return SignalTable(self.times, columns)
+
 
 def retrieve(
     model: HSMM,
@@ -72,6 +86,23 @@ def retrieve(
         reaches its mean (Calinon, IEEE RAM 2020).
     """
     return retrieve_batch([model], [duration], rate, control_cost, poses)[0]
+
+
+def retrieve_file(path: str | Path, duration: float | None = None, rate: float | None = None, frames: Sequence[str] = ()) -> Trajectory:
+    """`retrieve` of the model in the file `path`, a TP-HSMM for the frame poses `frames`
+    (`NAME=x,y,z[,yaw]` texts, one per frame of the model but `base`: `frame_poses`).
+
+    Raises:
+        ModelError: naming the file (and the expected duration, when `duration` is not given)
+            when the model cannot be retrieved.
+    """
+    model = load_model(path)
+    poses = frame_poses(model, list(frames), path)
+    try:
+        return retrieve(model, duration, rate, poses=poses)
+    except ModelError as error:
+        whose = "" if duration is not None else f" (its expected duration, {model.expected_duration():.3g} s)"
+        raise ModelError(f"{path}{whose}: {error}") from None
 
 
 def retrieve_batch(

@@ -30,6 +30,7 @@ _HOMES = {
     "Outcome": "stl_lfd.optim.trials",
     "best_trial": "stl_lfd.optim.trials",
     "finish_run": "stl_lfd.optim.runs.recorder",
+    "open_run": "stl_lfd.optim.runs.prepare",
     "resume_run": "stl_lfd.optim.runs.prepare",
     "start_run": "stl_lfd.optim.runs.prepare",
     "RunDirectory": "stl_lfd.optim.runs.directory",

@@ -27,6 +27,7 @@ from stl_lfd.spelling import spelled
 
 if TYPE_CHECKING:
     from stl_lfd.sim.backend import Backend, BackendOptions
+    from stl_lfd.sim.executor import Command
 
 
 @dataclass
@@ -88,6 +89,12 @@ def new_backend(name: str, options: "BackendOptions | None" = None) -> "Backend"
     if options.gui and not cls.capabilities.has_gui:
         raise ExecutionError(f"the {name} backend has no GUI (choose from {', '.join(gui_backends())}, or record a video)")
     return cls.open(options)
+
+
+def check_command_for(backend: str, command: "Command | None") -> None:
+    """ConfigError when an executor `command` is given for a backend that runs none."""
+    if command is not None and not backend_class(backend).capabilities.needs_command:
+        raise ConfigError(f"{spelled('command')} is for {spelled('backend')} command (the run's backend is {backend})")
 
 
 def gui_backends() -> tuple[str, ...]:

@@ -4,10 +4,8 @@ and the video out. Which skill a file or a run's trial names is `optim.runs.repl
 
 from __future__ import annotations
 
-from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.files import atomic_output, check_output_file
@@ -16,11 +14,9 @@ from stl_lfd.poses import Pose
 from stl_lfd.sim import DEFAULT_RATE, BackendOptions, new_backend
 from stl_lfd.sim.registry import DEFAULT_BACKEND, backend_class, backend_names
 from stl_lfd.skill.behaviour import load_behaviour
-from stl_lfd.skill.execution import scene_with_spec_regions
+from stl_lfd.skill.execution import ProgressFactory, scene_with_spec_regions
 from stl_lfd.skill.placed import PlacedSkill, placed_scene
 from stl_lfd.stl.evaluate import evaluate_table
-
-ProgressFactory = Callable[[str, int], AbstractContextManager[Callable[[int], None]]]
 
 
 @dataclass(frozen=True)

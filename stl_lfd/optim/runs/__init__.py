@@ -7,7 +7,8 @@
   `--resume` checks;
 - `recorder`: each finished trial recorded (the trial loop and `tell` alike), and `finish_run`;
 - `store`: one protocol for runs on disk and in memory;
-- `asktell`: trials handed out to run elsewhere and told back;
+- `asktell`: trials handed out to run elsewhere and told back; `targets`: the run `stlopt ask`
+  means (a run directory, or a task file's run);
 - `workers`: parallel trials in worker processes;
 - `sweep_file`, `sweep`: grids of runs, locally or on Ray.
 """

@@ -1,5 +1,6 @@
 """A run made ready for its trials: started from a task (the unoptimised skill executed and
-the run directory created in one step), or reopened from its run directory."""
+the run directory created in one step), or reopened from its run directory; `open_run`, either
+of them as `stlopt optimize` asks (with `--resume` or without)."""
 
 from __future__ import annotations
 
@@ -29,6 +30,7 @@ from stl_lfd.optim.task import Overrides, Task
 from stl_lfd.optim.tracking_fit import TRACKING_FILE, RunTracking
 from stl_lfd.optim.trials import Outcome, Trial
 from stl_lfd.signals import SignalTable
+from stl_lfd.sim.registry import check_command_for
 from stl_lfd.stl import ast
 
 
@@ -144,6 +146,33 @@ def start_run(
         objective.close()
         raise
     return PreparedRun(resolved, run, models, space, objective, [], summary, initial.payload)
+
+
+def open_run(
+    file_task: Task,
+    given: Overrides,
+    out: Path,
+    resume: bool = False,
+    learn_progress: Callable[[str], None] = lambda message: None,
+    ray: str | None = None,
+    watch_head: bool = False,
+) -> PreparedRun:
+    """The run in `out` of `file_task` (the task as its file gives it) with the settings `given`
+    on top: reopened where it stopped (`resume`: checked to be that run, extended to
+    `given.trials`), or started (`start_run`, which tells `learn_progress` when it learns the
+    skills). With `ray`, that Ray cluster is joined first (`ray_workers.connect`; `watch_head`:
+    the process ends when the cluster's head is lost), so that a cluster that cannot be reached
+    leaves nothing behind."""
+    if ray is not None:
+        from stl_lfd.optim.runs.ray_workers import connect
+
+        connect(ray, watch=watch_head)
+    if resume:
+        return resume_run(out, given.trials, file_task, given)
+    task = given.applied_to(file_task)
+    check_command_for(task.backend, given.command)
+    resolved = resolve(task)
+    return start_run(resolved, out, learn_progress, inputs_record(file_task, given, resolved))
 
 
 def resume_run(out: Path, trials: int | None = None, file_task: Task | None = None, given: Overrides = Overrides()) -> PreparedRun:

@@ -22,8 +22,8 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
 from stl_lfd.errors import RunError
-from stl_lfd.files import write_atomically
-from stl_lfd.optim.runs.sweep_file import Cell, Sweep
+from stl_lfd.files import check_output_folder, write_atomically
+from stl_lfd.optim.runs.sweep_file import Cell, Sweep, load_sweep
 
 RUNS_DIR = "runs"
 TABLE_FILE = "sweep.csv"
@@ -43,6 +43,27 @@ class CellResult:
     name: str
     record: dict[str, Any]
     archive: bytes = field(repr=False)
+
+
+def open_sweep(sweep_file: Path, out: Path | None = None, ray: str | None = None, watch_head: bool = False) -> tuple[Sweep, Path]:
+    """The sweep of `sweep_file` and its folder (`out`, default `runs/<sweep name>`), checked
+    to be writable. With `ray`, that Ray cluster is joined before any cell runs
+    (`ray_workers.connect`; `watch_head`: the process ends when the cluster's head is lost)."""
+    sweep = load_sweep(sweep_file)
+    folder = check_output_folder(out or Path("runs") / sweep.name, "sweep folder")
+    if ray is not None:
+        from stl_lfd.optim.runs.ray_workers import connect
+
+        connect(ray, watch=watch_head)
+    return sweep, folder
+
+
+def cell_results(jobs: int = 1, ray: str | None = None) -> Callable[[list[Cell]], Iterator[CellResult]]:
+    """How `run_sweep` runs its cells: as Ray tasks on the cluster `ray` (`ray_results`), or
+    by `jobs` local worker processes (`local_results`)."""
+    if ray is not None:
+        return lambda cells: ray_results(cells, ray)
+    return lambda cells: local_results(cells, jobs)
 
 
 def run_cell(cell: Cell) -> CellResult:

@@ -20,7 +20,7 @@ from stl_lfd.report.figures.contact import Forces, ObjectSignals, Wrench
 from stl_lfd.report.figures.paths import RegionDistances, Tilt, Trajectories
 from stl_lfd.report.figures.scores import Compare, Components, GpSlices, Robustness
 from stl_lfd.report.figures.skills import Durations, Transitions
-from stl_lfd.report.figures.learned import LearnedSkill, SkillDrawing
+from stl_lfd.report.figures.learned import SkillDrawing, SkillFigure
 from stl_lfd.report.figures.sweep import SweepCurves
 from stl_lfd.report.figures.tracking import Tracking
 
@@ -40,7 +40,7 @@ FIGURES: tuple[FigureSpec, ...] = (
     Tracking(),
     Compare(),
 )
-LEARNED_SKILL = LearnedSkill()
+LEARNED_SKILL = SkillFigure()
 SWEEP = SweepCurves()
 
 

@@ -4,13 +4,15 @@ ellipses, the retrieval."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import ClassVar
 
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse
 
-from stl_lfd.report.figures.base import FigureSpec, ReportOptions
+from stl_lfd.hsmm import LearnedSkill, retrieve
+from stl_lfd.report.figures.base import FigureSpec, ReportOptions, save_figure
 
 
 @dataclass(frozen=True)
@@ -34,7 +36,7 @@ class SkillDrawing:
     axes_pair: tuple[int, int] = (0, 1)
 
 
-class LearnedSkill(FigureSpec):
+class SkillFigure(FigureSpec):
     """Two panels: the plane of two signals, and every signal over time."""
 
     name: ClassVar[str] = "skill"
@@ -81,3 +83,10 @@ def _draw_timeline(axes, skill: SkillDrawing) -> None:
         axes.plot(times, skill.retrieved[:, dimension], color=f"C{dimension}", lw=2, label=name)
     axes.set(xlabel="time (s)", title="signals over time (faint: demonstrations)")
     axes.legend(loc="best", fontsize=8)
+
+
+def write_skill_figure(skill: LearnedSkill, path: Path) -> None:
+    """Draw a skill `stlopt learn` learned (as its demonstrations show it) into `path`."""
+    shown, model = skill.shown, skill.model
+    drawing = SkillDrawing(skill.sequences, shown.means_, shown.covars_, retrieve(shown).positions, model.sample_period_, model.signal_names_)
+    save_figure(SkillFigure().draw(drawing), path, dpi=110)
