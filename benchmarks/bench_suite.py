@@ -43,10 +43,11 @@ ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS_DIR = ROOT / "benchmarks" / "problems"
 RESULTS = ROOT / "benchmarks" / "results" / "suite.jsonl"
 SEARCH_RESULTS = ROOT / "benchmarks" / "results" / "search.jsonl"
-METHODS = ("stl", "plan", "pi", "logei", "random", "tpe", "plan-untracked")
+METHODS = ("stl", "plan", "pi", "logei", "random", "tpe", "plan-untracked", "plan-unbalanced", "stl-unbalanced")
 # plan-untracked: method plan scoring the plan as it stands, as it did before the tracking model
-# (for the problems whose robot does not execute the plan; not run unless asked for)
-DEFAULT_METHODS = METHODS[:-1]
+# (for the problems whose robot does not execute the plan); METHOD-unbalanced: the spec's parts
+# composed as recorded, as before `balance` (not run unless asked for)
+DEFAULT_METHODS = METHODS[:-3]
 TPE_STARTUP = 10  # Optuna's default n_startup_trials: random points before TPE proposes
 
 
@@ -136,6 +137,15 @@ def untracked():
         SkillObjective.plays_the_plan = original
 
 
+def unbalanced(task):
+    """`task` with its method composing the spec's parts as recorded (tuning `balance: false`)."""
+    from dataclasses import replace
+
+    optimizer = task.optimizer
+    settings = replace(optimizer.tuning_for(optimizer.method), balance=False)
+    return replace(task, optimizer=replace(optimizer, tuning={**optimizer.tuning, optimizer.method: settings}))
+
+
 def run_one(problem: str, method: str, seed: int) -> dict:
     """One optimisation run; returns its record (per-trial robustness and timings)."""
     warnings.simplefilter("ignore")
@@ -148,8 +158,10 @@ def run_one(problem: str, method: str, seed: int) -> dict:
         trials, inserted, initial = _run_tpe(executed, seed)
     else:
         name, initial_trials = method_and_initial(method)
+        base = name.removesuffix("-untracked").removesuffix("-unbalanced")
+        tool_task = executed.with_overrides(method=base, seed=seed, initial=initial_trials)
         with untracked() if name == "plan-untracked" else contextlib.nullcontext():
-            trials, inserted, initial = _run_tool(executed.with_overrides(method=name.removesuffix("-untracked"), seed=seed, initial=initial_trials))
+            trials, inserted, initial = _run_tool(unbalanced(tool_task) if name.endswith("-unbalanced") else tool_task)
     scored = [trial for trial in trials if trial.robustness is not None]
     best_x = max(scored, key=lambda trial: trial.robustness).x.tolist() if scored else None
     robustness = [trial.robustness for trial in trials]
