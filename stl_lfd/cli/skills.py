@@ -115,10 +115,11 @@ def _report_learned(skill: LearnedSkill, states: int) -> None:
 
 
 def _print_summary(rows: list[dict], names: list[str]) -> None:
-    header = ["state"] + [f"{name}" for name in names] + ["duration_s", "duration_std_s", "successor"]
+    spreads = list(rows[0]["spread"]) if rows else []
+    header = ["state"] + [f"{name}" for name in names] + spreads + ["duration_s", "duration_std_s", "successor"]
     print("\t".join(header))
     for row in rows:
-        values = [str(row["state"])] + [f"{row['mean'][name]:.4f}" for name in names]
+        values = [str(row["state"])] + [f"{row['mean'][name]:.4f}" for name in names] + [f"{row['spread'][name]:.1f}" for name in spreads]
         values += [f"{row['duration_mean']:.3f}", f"{row['duration_std']:.3f}", str(row["successor"] or "-")]
         print("\t".join(values))
 

@@ -116,8 +116,13 @@ def _check_settings(n_states: int, sample_period: float | None) -> None:
         raise ModelError(f"the sample period must be a positive number of seconds (got {sample_period:g})")
 
 
+SPREAD_BLOCKS = {"spread_mm": (("x", "y", "z"), 1000.0), "spread_deg": (("rx", "ry", "rz"), 180.0 / np.pi)}
+
+
 def summary_rows(model: HSMM) -> list[dict]:
-    """Per state: mean position, duration mean and std (s), most likely successor."""
+    """Per state: mean of each signal, spread (position in mm, orientation in degrees: the
+    standard deviation along the state's widest direction, where the model has them), duration
+    mean and std (s), most likely successor."""
     transmat = model.normalized_transmat()
     rows = []
     for k in range(model.n_states):
@@ -126,12 +131,26 @@ def summary_rows(model: HSMM) -> list[dict]:
             {
                 "state": k + 1,
                 "mean": {name: float(value) for name, value in zip(model.signal_names_, model.means_[k])},
+                "spread": state_spreads(model, k),
                 "duration_mean": float(model.duration_means_[k]),
                 "duration_std": float(model.duration_stds_[k]),
                 "successor": successor,
             }
         )
     return rows
+
+
+def state_spreads(model: HSMM, state: int) -> dict[str, float]:
+    """`spread_mm` and `spread_deg` of a state (those of the blocks the model has): the square
+    root of the largest eigenvalue of its covariance over x, y, z (rx, ry, rz), in mm (deg)."""
+    names = list(model.signal_names_)
+    spreads = {}
+    for column, (block, unit) in SPREAD_BLOCKS.items():
+        if set(block) <= set(names):
+            indices = [names.index(name) for name in block]
+            covariance = np.asarray(model.covars_[state])[np.ix_(indices, indices)]
+            spreads[column] = float(np.sqrt(max(np.linalg.eigvalsh(covariance)[-1], 0.0)) * unit)
+    return spreads
 
 
 def demonstrated_skill(model: HSMM, folder: str | Path) -> HSMM:

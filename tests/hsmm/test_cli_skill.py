@@ -22,7 +22,7 @@ def test_learn_writes_a_model_and_a_summary(tmp_path: Path):
     result = runner.invoke(app, ["learn", str(DEMOS), "-K", "6", "-o", str(tmp_path / "m.npz"), "--plot", str(tmp_path / "s.png")])
     assert result.exit_code == 0, result.stderr
     lines = result.stdout.strip().splitlines()
-    assert lines[0].split("\t") == ["state", "x", "y", "z", "duration_s", "duration_std_s", "successor"]
+    assert lines[0].split("\t") == ["state", "x", "y", "z", "spread_mm", "duration_s", "duration_std_s", "successor"]
     assert len(lines) == 7 and lines[-1].split("\t")[-1] == "-"
     assert load_model(tmp_path / "m.npz").n_states == 6
     assert (tmp_path / "s.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
