@@ -116,6 +116,15 @@ class Overrides:
         """The settings given (not None), by name."""
         return {item.name: getattr(self, item.name) for item in fields(self) if getattr(self, item.name) is not None}
 
+    def fitted_to(self, task: Task) -> tuple["Overrides", str]:
+        """These settings for a new run of `task`, and a note ('' for none): a budget of trials
+        (`trials`) below the task's initial trials, with `initial` not given, lowers `initial`
+        to it (a quick try of a task file) instead of refusing."""
+        if self.trials is None or self.initial is not None or self.trials >= task.optimizer.initial or self.trials < 1:
+            return self, ""
+        note = f"note: {spelled('trials')} {self.trials} is below the task's {task.optimizer.initial} initial trials, so {spelled('initial')} is {self.trials} for this run"
+        return replace(self, initial=self.trials), note
+
     def applied_to(self, task: Task) -> Task:
         """`task` with these settings in place of its own (validated as a task file's are)."""
         given = self.given()

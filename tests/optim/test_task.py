@@ -3,7 +3,7 @@ from pathlib import Path
 import pytest
 
 from stl_lfd.errors import ConfigError
-from stl_lfd.optim import build_search_space, load_task
+from stl_lfd.optim import Overrides, build_search_space, load_task
 from tests.conftest import ROOT
 
 CONFIGS = ROOT / "configs"
@@ -138,3 +138,13 @@ def test_a_scene_file_is_relative_to_the_task_file_and_survives_the_run_record(t
     (tmp_path / "run").mkdir()
     (tmp_path / "run" / "task.yaml").write_text(yaml.safe_dump(task.to_yaml_dict()))  # as a run directory keeps it
     assert load_task(Path("run/task.yaml")).scene == task.scene
+
+
+def test_a_budget_below_the_initial_trials_lowers_them_for_a_new_run_with_a_note(tmp_path):
+    task = load_task(write_task(tmp_path, GOOD_PARAMETERS))
+    initial = task.optimizer.initial
+    given, note = Overrides(trials=initial - 1).fitted_to(task)
+    assert given.initial == initial - 1 and given.applied_to(task).optimizer.trials == initial - 1
+    assert f"{initial - 1} is below the task's {initial} initial trials" in note and note.endswith(f"is {initial - 1} for this run")
+    for unchanged in (Overrides(trials=initial), Overrides(trials=2, initial=3), Overrides(seed=1)):
+        assert unchanged.fitted_to(task) == (unchanged, "")

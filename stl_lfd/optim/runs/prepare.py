@@ -169,6 +169,9 @@ def open_run(
         connect(ray, watch=watch_head)
     if resume:
         return resume_run(out, given.trials, file_task, given)
+    given, note = given.fitted_to(file_task)
+    if note:
+        learn_progress(note)
     task = given.applied_to(file_task)
     check_command_for(task.backend, given.command)
     resolved = resolve(task)

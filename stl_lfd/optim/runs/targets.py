@@ -40,5 +40,8 @@ def ask_run(
     run_dir = out or Path("runs") / file_task.name
     if run_dir.is_dir() and any(run_dir.iterdir()):
         return run_dir, ask(run_dir, given.trials, file_task, given, on_refused=on_refused, robot=robot)
+    given, note = given.fitted_to(file_task)
+    if note:
+        learn_progress(note)
     resolved = resolve(given.applied_to(file_task))
     return run_dir, ask_new(resolved, run_dir, inputs_record(file_task, given, resolved), learn_progress)
