@@ -41,6 +41,7 @@ from stl_lfd.sim import Capabilities, KinematicBackend
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS_DIR = ROOT / "benchmarks" / "problems"
+USER_TASKS_DIR = ROOT / "benchmarks" / "user_tasks"  # contact tasks written as a user writes them
 RESULTS = ROOT / "benchmarks" / "results" / "suite.jsonl"
 SEARCH_RESULTS = ROOT / "benchmarks" / "results" / "search.jsonl"
 METHODS = ("stl", "plan", "pi", "logei", "random", "tpe", "plan-untracked", "plan-unbalanced", "stl-unbalanced")
@@ -73,11 +74,27 @@ def problem_names() -> list[str]:
 
 
 def task_file(problem: str) -> Path:
-    """A suite problem, or a bundled task (`configs/NAME.yaml`) by its name (a `+lag` variant:
-    the problem's file)."""
+    """A suite problem, a user-written task (`user_tasks/NAME/task.yaml`), or a bundled task
+    (`configs/NAME.yaml`) by its name (a `+VARIANT`: the problem's file)."""
     name = problem.partition("+")[0]
-    path = PROBLEMS_DIR / f"{name}.yaml"
-    return path if path.exists() else ROOT / "configs" / f"{name}.yaml"
+    for path in (PROBLEMS_DIR / f"{name}.yaml", USER_TASKS_DIR / name / "task.yaml"):
+        if path.exists():
+            return path
+    return ROOT / "configs" / f"{name}.yaml"
+
+
+def user_check(problem: str):
+    """The physical check of a user-written task (`check.py: done(signals, scene_path)`, which
+    reads object poses, not the spec), or None."""
+    import importlib.util
+
+    path = USER_TASKS_DIR / problem.partition("+")[0] / "check.py"
+    if not path.exists():
+        return None
+    spec = importlib.util.spec_from_file_location(f"user_check_{path.parent.name}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.done
 
 
 LAG_SECONDS = 0.3  # time constant of the tracking lag
@@ -116,6 +133,8 @@ def executed_as(problem: str, task):
     from stl_lfd.sim import register
 
     variant = problem.partition("+")[2]
+    if variant == "mujoco":
+        return task.with_overrides(backend="mujoco")
     if not variant or task.backend != "kinematic":
         return task
     robot = LaggingBackend() if variant == "lag" else VARIANTS[variant]
@@ -161,7 +180,7 @@ def run_one(problem: str, method: str, seed: int) -> dict:
         base = name.removesuffix("-untracked").removesuffix("-unbalanced")
         tool_task = executed.with_overrides(method=base, seed=seed, initial=initial_trials)
         with untracked() if name == "plan-untracked" else contextlib.nullcontext():
-            trials, inserted, initial = _run_tool(unbalanced(tool_task) if name.endswith("-unbalanced") else tool_task)
+            trials, inserted, initial = _run_tool(unbalanced(tool_task) if name.endswith("-unbalanced") else tool_task, user_check(problem))
     scored = [trial for trial in trials if trial.robustness is not None]
     best_x = max(scored, key=lambda trial: trial.robustness).x.tolist() if scored else None
     robustness = [trial.robustness for trial in trials]
@@ -239,9 +258,10 @@ def _learning_digest(demos: Path, states: int) -> str:
     return digest.hexdigest()[:12]
 
 
-def _run_tool(task) -> tuple[list, list[bool | None], float]:
-    """The run's trials, whether each put the shaft in the hole (the physical check of a contact
-    task's trial, or None where there is none), and the unoptimised skill's robustness."""
+def _run_tool(task, check=None) -> tuple[list, list[bool | None], float]:
+    """The run's trials, whether each achieved the task physically (`check(signals, scene
+    path)`, else for a contact task whether the shaft went into the hole; None where there is
+    no check), and the unoptimised skill's robustness."""
     import tempfile
 
     from benchmarks.physical import holder_pose, is_contact_task, physically_inserted, scene_geometry
@@ -253,8 +273,13 @@ def _run_tool(task) -> tuple[list, list[bool | None], float]:
         run = RunDirectory(Path(folder) / "run")
         trials, inserted = run.trials(), []
         for trial in trials:
-            signals = run.recorded_signals(trial.trial) if is_contact_task(task) else None
-            inserted.append(None if signals is None else physically_inserted(signals, holder_pose(task), scene_geometry(task.scene)))
+            signals = run.recorded_signals(trial.trial) if check is not None or is_contact_task(task) else None
+            if signals is None:
+                inserted.append(None)
+            elif check is not None:
+                inserted.append(bool(check({"t": signals.times, **signals.columns}, task.scene)))
+            else:
+                inserted.append(physically_inserted(signals, holder_pose(task), scene_geometry(task.scene)))
         return trials, inserted, prepared.summary.initial_robustness
 
 
