@@ -13,7 +13,7 @@ import gc
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Callable, Iterator
+from typing import Callable, Iterator, Sequence
 
 
 @dataclass(frozen=True)
@@ -29,15 +29,6 @@ class Node:
 
     def children(self) -> tuple["Node", ...]:
         return ()
-
-    def walk(self) -> Iterator["Node"]:
-        """This node and all its descendants, depth first (without recursion, so that deep
-        formulas cannot exhaust the stack)."""
-        stack: list[Node] = [self]
-        while stack:
-            node = stack.pop()
-            yield node
-            stack.extend(reversed(node.children()))
 
 
 def _children(node: "Node") -> tuple["Node", ...]:
@@ -63,13 +54,47 @@ def post_order(
         node = stack.pop()
         if node is None:  # all of the next node's children are in `order`
             order.append(stack.pop())  # type: ignore[arg-type]
-        elif id(node) not in seen:
-            seen.add(id(node))
-            stack += (node, None)
-            stack += reversed(below(node))  # the first child comes out first
+        elif (key := id(node)) not in seen:
+            seen.add(key)
+            children = below(node)
+            if children:
+                stack += (node, None)
+                stack += reversed(children)  # the first child comes out first
+            else:
+                order.append(node)
         elif shared is not None:
-            shared.add(id(node))
+            shared.add(key)
     return order
+
+
+def pre_order(root: "Node", below: Callable[["Node"], tuple["Node", ...]] | None = None) -> list["Node"]:
+    """The distinct nodes under `root` (itself included), each before its children, in the
+    order of the text: the order in which `post_order` first reaches them."""
+    below = below or _children
+    reached: list[Node] = []
+
+    def recording(node: Node) -> tuple[Node, ...]:  # `post_order` asks once per distinct node
+        reached.append(node)
+        return below(node)
+
+    post_order(root, recording)
+    return reached
+
+
+def depth(node: "Node", child_depths: Sequence[int]) -> int:
+    """How many levels of operators `node` nests, given its children's depths: one more than
+    the deepest (a leaf is 1 level, a predicate `x > 0` 2); a name (`Ref`) counts as deep as
+    the definition it stands for, its one child when names are followed."""
+    deepest = max(child_depths) if child_depths else 0  # `max(default=)` takes twice as long
+    return deepest if type(node) is Ref else deepest + 1
+
+
+def reach(node: "Node", child_reaches: Sequence[float]) -> float:
+    """Seconds beyond the evaluation time that the bounded windows of `node` look, given its
+    children's reaches."""
+    furthest = max(child_reaches) if child_reaches else 0.0
+    interval = getattr(node, "interval", None)
+    return furthest + interval.hi if interval is not None else furthest
 
 
 @contextmanager

@@ -5,7 +5,7 @@ the semantics' kernels (one function per node type, registered with `@_handles`)
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Iterator, Mapping
+from typing import Callable, Mapping
 
 import numpy as np
 
@@ -50,19 +50,6 @@ def _window(interval: ast.Interval | None, trace: Trace, start: int) -> tuple[in
     return lo, min(hi, last)
 
 
-def distinct_nodes(formula: ast.Node) -> Iterator[ast.Node]:
-    """Each node of `formula` once, depth first in the order of the text, however often it is
-    shared."""
-    seen: set[int] = set()
-    stack = [formula]
-    while stack:
-        node = stack.pop()
-        if id(node) not in seen:
-            seen.add(id(node))
-            yield node
-            stack.extend(reversed(node.children()))
-
-
 _COMPILERS: dict[type, Callable[[ast.Node, list[Evaluator], Semantics], Evaluator]] = {}
 
 
@@ -90,27 +77,27 @@ def compile_formula(formula: ast.Formula, semantics: Semantics) -> Compiled:
     with the formula's depth, horizon and signals found on the way."""
     shared: set[int] = set()
     evaluators: dict[int, Evaluator] = {}
-    extents: dict[int, tuple[int, float]] = {}  # id -> (depth, horizon)
+    extents: dict[int, tuple[int, float]] = {}  # id -> (depth, reach)
     signals: set[str] = set()
     for node in ast.post_order(formula, _parts, shared):
         try:
             compiler = _COMPILERS[type(node)]
         except KeyError:
             raise TypeError(f"cannot compile node of type {type(node).__name__}") from None
-        parts = _parts(node)
+        key, parts = id(node), _parts(node)
         evaluator = compiler(node, [evaluators[id(part)] for part in parts], semantics)
-        evaluators[id(node)] = _computed_once(evaluator) if id(node) in shared else evaluator
+        evaluators[key] = _computed_once(evaluator) if key in shared else evaluator
         if parts:
-            depth, reach = max(extents[id(part)][0] for part in parts), max(extents[id(part)][1] for part in parts)
-            interval = getattr(node, "interval", None)
-            extents[id(node)] = (depth + 1, reach + interval.hi if interval is not None else reach)
-        elif type(node) is ast.Compare:  # a signal against a number
+            operand_extents = [extents[id(part)] for part in parts]
+            depth = ast.depth(node, [depth for depth, _ in operand_extents])
+            extents[key] = (depth, ast.reach(node, [reach for _, reach in operand_extents]))
+        elif type(node) is ast.Compare:  # a signal against a number: 2 levels, as `ast.depth` counts it
             signals.add(_signal_versus_number(node)[0])  # type: ignore[index]
-            extents[id(node)] = (2, 0.0)
+            extents[key] = (2, 0.0)
         else:
             if type(node) is ast.Signal:
                 signals.add(node.name)  # type: ignore[attr-defined]
-            extents[id(node)] = (1, 0.0)
+            extents[key] = (1, 0.0)
     depth, reach = extents[id(formula)]
     return Compiled(evaluators[id(formula)], depth, reach, frozenset(signals))
 

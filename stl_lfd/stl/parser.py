@@ -169,8 +169,7 @@ def _depths(spec: ast.Spec) -> dict[int, int]:
 
     depths: dict[int, int] = {}
     for node in ast.post_order(spec.formula, below):
-        deepest = max([depths[id(child)] for child in below(node)], default=0)
-        depths[id(node)] = deepest if isinstance(node, ast.Ref) else 1 + deepest
+        depths[id(node)] = ast.depth(node, [depths[id(child)] for child in below(node)])
     return depths
 
 
@@ -280,7 +279,9 @@ def _rebuild(node: ast.Node, children: tuple[ast.Node, ...]) -> ast.Node:
 
 
 def _check_names(spec: ast.Spec) -> None:
-    """Duplicate, undefined and recursive names; formula names used as signals."""
+    """Duplicate, undefined and recursive names; formula names used as signals (the first in
+    the order of the text: names and signals are leaves, which `ast.post_order` gives in that
+    order)."""
     definitions: dict[str, ast.Definition] = {}
     for definition in spec.definitions:
         if definition.name in definitions:
@@ -294,7 +295,7 @@ def _check_names(spec: ast.Spec) -> None:
     bodies = [definition.formula for definition in spec.definitions]
     if spec.name is None:  # a bare formula; else it is the last definition's
         bodies.append(spec.formula)
-    for node in (node for body in bodies for node in body.walk()):
+    for node in (node for body in bodies for node in ast.post_order(body)):
         if isinstance(node, ast.Ref) and node.name not in definitions:
             raise StlNameError(
                 f"undefined formula '{node.name}' (a signal needs a comparison, e.g. {node.name} > 0)",
@@ -338,4 +339,4 @@ def _check_recursion(definitions: dict[str, ast.Definition]) -> None:
 
 
 def _names_used(definition: ast.Definition):
-    return (node.name for node in definition.formula.walk() if isinstance(node, ast.Ref))
+    return (node.name for node in ast.post_order(definition.formula) if isinstance(node, ast.Ref))

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike
 from stl_lfd.choices import DEFAULT_SEMANTICS
 from stl_lfd.errors import SignalError, SpecError, StlNameError
 from stl_lfd.stl import ast
-from stl_lfd.stl.evaluators import TIME_TOLERANCE, Trace, compile_formula, distinct_nodes
+from stl_lfd.stl.evaluators import TIME_TOLERANCE, Trace, compile_formula
 from stl_lfd.stl.parser import MAX_DEPTH, parse, resolve
 from stl_lfd.stl.printer import format_formula
 from stl_lfd.stl.semantics import Semantics, SemanticsName
@@ -77,7 +77,7 @@ class Robustness:
         # The bounded `G`/`F` and their window lengths (s), for the cost warning of `_prepare`.
         self._windows = [
             (node, node.interval.hi - node.interval.lo)
-            for node in (distinct_nodes(formula) if semantics.name == "new" else ())
+            for node in (ast.pre_order(formula) if semantics.name == "new" else ())
             if isinstance(node, (ast.Always, ast.Eventually)) and node.interval is not None
         ]
         self._warned_of_cost = False
@@ -114,7 +114,7 @@ class Robustness:
         arrays = {name: np.asarray(signals[name], dtype=float) for name in self.signals if name in signals}
         missing = sorted(self.signals - arrays.keys())
         if missing:
-            node = next(n for n in distinct_nodes(self.formula) if isinstance(n, ast.Signal) and n.name == missing[0])
+            node = next(n for n in ast.pre_order(self.formula) if isinstance(n, ast.Signal) and n.name == missing[0])
             available = ", ".join(sorted(signals)) or "none"
             raise StlNameError(f"unknown signal '{node.name}' (the trace has: {available})", node.source, node.line, node.column)
         _check_times(times)
@@ -169,12 +169,10 @@ def compile_spec(
 
 def horizon(node: ast.Node) -> float:
     """Seconds beyond the first sample that the bounded windows of `node` reach."""
-    reach: dict[int, float] = {}
+    reaches: dict[int, float] = {}
     for each in ast.post_order(node):
-        interval = getattr(each, "interval", None)
-        below = max([reach[id(child)] for child in each.children()], default=0.0)
-        reach[id(each)] = below + interval.hi if interval is not None else below
-    return reach[id(node)]
+        reaches[id(each)] = ast.reach(each, [reaches[id(child)] for child in each.children()])
+    return reaches[id(node)]
 
 
 # --- Helper functions -----------------------------------------------------------------------

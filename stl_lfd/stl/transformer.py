@@ -146,7 +146,7 @@ class ToAst(Transformer):
     def _node(self, node: ast.Node, first: Part | Token, operator: Token, operands) -> Part:
         """`node` as a `Part` starting where `first` starts; the first operator to nest past
         `MAX_DEPTH` is noted."""
-        depth = 1 + max(operand.depth for operand in operands)
+        depth = ast.depth(node, [operand.depth for operand in operands])
         if depth > MAX_DEPTH and self.too_deep is None:
             self.too_deep = (operator.line, operator.column)
         return Part(node, first.line, first.column, depth)
