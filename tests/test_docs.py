@@ -110,3 +110,14 @@ def test_the_site_builds_without_warnings(tmp_path):
     result = subprocess.run([*command, "build", "--strict", "--site-dir", str(tmp_path / "site")], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr[-2000:]
     assert (tmp_path / "site" / "cli" / "index.html").exists() and (tmp_path / "site" / "reference" / "stl" / "index.html").exists()
+
+
+def test_the_scene_file_example_loads_with_every_key_it_explains(tmp_path):
+    from stl_lfd.sim import load_scene
+
+    page = (ROOT / "docs" / "execution.md").read_text()
+    example = page.split("### A scene file", 1)[1].split("```yaml\n", 1)[1].split("```", 1)[0]
+    (tmp_path / "shelf.yaml").write_text(example)
+    scene = load_scene(str(tmp_path / "shelf.yaml"))
+    can = next(item for item in scene.objects if item.name == "can")
+    assert can.size == (0.02, 0.08) and can.mass == 0.1 and {frame.name for frame in scene.frames} == {"can", "shelf"}
