@@ -60,6 +60,9 @@ def optimize(
     ),
     place: list[str] = typer.Option([], "--place", help=PLACE_HELP + " Replaces the task's placements."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="On stderr, only what runs and the verdict (no line per trial); errors still show."),
+    dry_run: bool = typer.Option(
+        False, "--dry-run", help="Run no trial: print each parameter's range (mm, deg, s) and what the plans at the box's centre and corners say of each part of the spec."
+    ),
 ) -> None:
     """Optimise a skill so that its execution satisfies the task's STL specification.
 
@@ -95,12 +98,30 @@ def optimize(
             spec=spec, seed=seed, initial=init, trials=iterations, backend=backend.value if backend else None, method=method.value if method else None,
             workers=workers, command=command_of(command, command_timeout, file_task.command), placements=placements_of(file_task.scene, place),
         )  # fmt: skip
+        if dry_run:
+            from stl_lfd.optim.box import task_box
+
+            return _print_box(task_box(file_task, given))
         run_dir = out or Path("runs") / file_task.name
         prepared = open_run(file_task, given, run_dir, resume, (lambda message: None) if quiet else to_stderr, ray, watch_head=True)
     again = _optimize_again(task_file, spec, demos, model, run_dir)
     with prepared, user_errors(on_interrupt=f"interrupted; the finished trials are kept. Continue with: {again}"):
         summary = finish_printed(prepared, quiet, ray)
     print(json.dumps(summary.to_json(), indent=2))
+
+
+def _print_box(report) -> None:
+    """The tables of `stlopt optimize --dry-run` on stdout."""
+    print_table(
+        ["parameter", "unit", "unoptimised", "lower", "upper"],
+        [[item.name, item.unit or "-", f"{item.initial:.4g}", f"{item.lower:.4g}", f"{item.upper:.4g}"] for item in report.parameters],
+    )
+    print()
+    print_table(
+        ["part of the spec", "unoptimised plan", "centre's plan", "best plan", f"plans satisfying (of {report.points})"],
+        [[part.name, f"{part.unoptimised:+.4g}", f"{part.centre:+.4g}", f"{part.best:+.4g}", str(part.satisfied)] for part in report.parts],
+    )
+    print("\nplans are the kinematic backend's: they record no force (a part on the force reads as nothing touched)", file=sys.stderr)
 
 
 def _optimize_again(task_file: Optional[Path], spec: Optional[Path], demos: Optional[Path], model: Optional[Path], run_dir: Path) -> str:
