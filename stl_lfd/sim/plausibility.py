@@ -123,6 +123,8 @@ def signal_ranges(scene: Scene) -> dict[str, tuple[float, float, str]]:
     for frame in scene.frames:
         if frame.into is not None:
             ranges[frame.hole_signals[1]] = (0.0, math.inf, f"{frame.name}'s offset from the hole's axis (m)")
+        if frame.onto is not None:
+            ranges[frame.target_signals[3]] = (0.0, math.inf, f"{frame.name}'s offset from its target (m)")
     return ranges
 
 

@@ -23,7 +23,7 @@ from stl_lfd.errors import ExecutionError
 from stl_lfd.rotations import QUATERNION_COLUMNS
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.reference import Reference, Rollout, recording_times
-from stl_lfd.sim.scene import Scene, lowest_heights
+from stl_lfd.sim.scene import Scene, SceneFrame, lowest_heights
 
 
 @dataclass
@@ -109,7 +109,24 @@ def outcome_columns(steps: Steps, scene: Scene) -> dict[str, np.ndarray]:
         depth_signal, offset_signal = frame.hole_signals
         columns[depth_signal] = hole_positions[:, 2] + hole.rim - lowest_heights(item.shape, item.size, centres, orientations)
         columns[offset_signal] = np.hypot(*(centres[:, :2] - hole_positions[:, :2]).T)
+    for frame in scene.frames:
+        if frame.onto is not None:
+            columns.update(target_columns(steps, scene, frame, index))
     return columns
+
+
+def target_columns(steps: Steps, scene: Scene, frame: SceneFrame, index: dict[str, int]) -> dict[str, np.ndarray]:
+    """At `steps.times`: how a frame's object sits on its target (`SceneFrame.target_signals`):
+    the height of its lowest point above the target's origin, and its centre's offset from that
+    origin along the x and y axes of the target's first object, as it stands."""
+    item = scene.carried_object(frame)
+    orientations = steps.frame_orientations[:, index[frame.name]]
+    centres = steps.frame_positions[:, index[frame.name]] - rotations.rotate(orientations, np.tile(scene.origin_in_object(frame), (len(steps.times), 1)))
+    target = index[frame.onto]
+    origins, turns = steps.frame_positions[:, target], steps.frame_orientations[:, target]
+    dx, dy = rotations.rotate(rotations.conjugate(turns), centres - origins)[:, :2].T
+    height = lowest_heights(item.shape, item.size, centres, orientations) - origins[:, 2]
+    return dict(zip(frame.target_signals, (height, dx, dy, np.hypot(dx, dy))))
 
 
 class Recorder:

@@ -146,6 +146,9 @@ class SceneFrame:
             whose rim lies `rim` metres above the origin (None: no hole).
         into: the frame (one with a `rim`) whose hole this frame's movable object goes into;
             rollouts then record `NAME_depth` and `NAME_offset` (None: no hole to go into).
+        onto: the frame whose origin is the target point this frame's movable object is put on
+            (a spot on a shelf's top, the centre of a block's top face); rollouts then record
+            `NAME_height`, `NAME_dx`, `NAME_dy` and `NAME_offset` (None: no such target).
     """
 
     name: str
@@ -156,6 +159,7 @@ class SceneFrame:
     home_yaw: float = 0.0
     rim: float | None = None
     into: str | None = None
+    onto: str | None = None
 
     def equivalent(self, pose: Pose) -> Pose:
         """`pose` with its yaw turned by a multiple of the symmetry's angle to lie within half of
@@ -194,6 +198,14 @@ class SceneFrame:
         rim (m, negative above it), and the horizontal distance (m) from the object's centre
         to the hole's axis."""
         return (f"{self.name}_depth", f"{self.name}_offset")
+
+    @property
+    def target_signals(self) -> tuple[str, str, str, str]:
+        """For a frame put `onto` a target: the height (m) of its object's lowest point above the
+        target's origin (0 resting on a surface there, negative below it), its object's centre's
+        offset from the origin along the x and y axes of the target's first object (m), and
+        their distance."""
+        return (f"{self.name}_height", f"{self.name}_dx", f"{self.name}_dy", f"{self.name}_offset")
 
 
 @dataclass(frozen=True)
@@ -252,14 +264,16 @@ class Scene:
     def recorded_signals(self) -> tuple[str, ...]:
         """What a rollout in this scene records: `RECORDED_SIGNALS`, each frame's position, each
         frame's tilt, then the speed and held flag of each frame that moves with a movable object
-        (`moving_frames`), the depth and offset of each frame that goes into a hole, and last the
-        orientation of each frame that moves with a movable object."""
+        (`moving_frames`), the depth and offset of each frame that goes into a hole, the height
+        and offsets of each frame put onto a target, and last the orientation of each frame that
+        moves with a movable object."""
         return (
             RECORDED_SIGNALS
             + tuple(signal for frame in self.frames for signal in frame.signals)
             + tuple(frame.tilt_signal for frame in self.frames)
             + tuple(signal for frame in self.moving_frames for signal in frame.motion_signals)
             + tuple(signal for frame in self.frames if frame.into for signal in frame.hole_signals)
+            + tuple(signal for frame in self.frames if frame.onto for signal in frame.target_signals)
             + tuple(signal for frame in self.moving_frames for signal in frame.orientation_signals)
         )
 

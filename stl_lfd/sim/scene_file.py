@@ -151,6 +151,23 @@ def _check_holes(scene: Scene, path: Path) -> None:
             raise ConfigError(
                 f"{path}: 'frames.{frame.name}.into': the frame's first object, {frame.objects[0]}, must be movable (a mass above 0): it is what goes into the hole"
             )
+    _check_targets(scene, path)
+
+
+def _check_targets(scene: Scene, path: Path) -> None:
+    """ConfigError for an `onto` that names no other frame, or whose frame does not start with a
+    movable object."""
+    names = [frame.name for frame in scene.frames]
+    objects = {item.name: item for item in scene.objects}
+    for frame in scene.frames:
+        if frame.onto is None:
+            continue
+        if frame.onto not in names or frame.onto == frame.name:
+            raise ConfigError(f"{path}: 'frames.{frame.name}.onto' must name another frame, the target (got {shown(frame.onto)}; frames: {', '.join(names)})")
+        if objects[frame.objects[0]].mass <= 0:
+            raise ConfigError(
+                f"{path}: 'frames.{frame.name}.onto': the frame's first object, {frame.objects[0]}, must be movable (a mass above 0): it is what is put on the target"
+            )
 
 
 def _check_rim(frame: SceneFrame, walls: list[SceneObject], path: Path) -> None:
@@ -171,7 +188,7 @@ def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
     where = f"frames.{name}"
     if not isinstance(name, str) or not name.isidentifier() or name == BASE_FRAME:
         raise ConfigError(f"{path}: frame name {shown(name)} must be a name (letters, digits, _) other than '{BASE_FRAME}'")
-    check_keys(data, ("position", "yaw", "objects", "area", "symmetry", "rim", "into"), path, where, required=("position", "objects"))
+    check_keys(data, ("position", "yaw", "objects", "area", "symmetry", "rim", "into", "onto"), path, where, required=("position", "objects"))
     pose = parse_pose({key: data[key] for key in ("position", "yaw") if key in data}, path, where)
     objects = data["objects"]
     known = [item.name for item in scene.objects]
@@ -191,10 +208,12 @@ def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
             f"(1: none, 2: a half turn, 4: a quarter turn; got {shown(symmetry)})"
         )
     rim = number(data["rim"], path, f"{where}.rim") if "rim" in data else None
-    into = data.get("into")
+    into, onto = data.get("into"), data.get("onto")
     if into is not None and not isinstance(into, str):
         raise ConfigError(f"{path}: '{where}.into' must name the frame whose hole the object goes into (got {shown(into)})")
-    frame = SceneFrame(name, pose, tuple(str(item) for item in objects), area, symmetry, pose.yaw, rim, into)  # type: ignore[arg-type]
+    if onto is not None and (not isinstance(onto, str) or into is not None):
+        raise ConfigError(f"{path}: '{where}.onto' must name the frame the object is put on, and a frame goes either into a hole or onto a target (got {shown(onto)})")
+    frame = SceneFrame(name, pose, tuple(str(item) for item in objects), area, symmetry, pose.yaw, rim, into, onto)  # type: ignore[arg-type]
     check_area(frame, pose, str(path))
     return frame
 

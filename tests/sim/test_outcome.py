@@ -53,3 +53,40 @@ def test_the_kinematic_backend_records_the_shaft_held_moving_and_in_the_hole():
     assert columns["shaft_depth"][-1] == pytest.approx(0.06 - (0.11 - 0.03 - 0.06))
     assert columns["shaft_offset"][-1] == pytest.approx(0.003, abs=1e-6)
     assert columns["shaft_offset"][0] == pytest.approx(math.hypot(0.1, 0.45))
+
+
+ONTO_SCENE = """description: a box to put on a turned shelf
+objects:
+  - {name: table, shape: box, size: [0.25, 0.45, 0.01], position: [0.5, 0.0, 0.01]}
+  - {name: box, shape: box, size: [0.02, 0.02, 0.03], position: [0.45, -0.22, 0.05], mass: 0.1}
+  - {name: shelf, shape: box, size: [0.08, 0.10, 0.05], position: [0.55, 0.20, 0.07], orientation: [0, 0, 0.5]}
+frames:
+  box: {position: [0.45, -0.22, 0.05], objects: [box], onto: shelf}
+  shelf: {position: [0.55, 0.20, 0.12], objects: [shelf]}
+"""
+
+
+def test_an_object_put_onto_a_target_records_its_height_and_offset_in_the_targets_axes(tmp_path):
+    (tmp_path / "onto.yaml").write_text(ONTO_SCENE)
+    scene = load_scene(str(tmp_path / "onto.yaml"))
+    grasp = np.array([0.45, -0.22, 0.06])  # 1 cm above the box's centre
+    along = np.array([np.cos(0.5), np.sin(0.5), 0.0])  # the shelf's x axis, turned 0.5 rad
+    put_down = np.array([0.55, 0.20, 0.12 + 0.03 + 0.002 + 0.01]) + 0.015 * along  # 2 mm above the top, 15 mm along x
+    columns = execute(carry_into_hole(scene, grasp, put_down), scene, "kinematic", rate=100.0).signals.columns
+    assert columns["box_height"][0] == pytest.approx(0.02 - 0.12)  # on the table, 10 cm below the shelf's top
+    assert columns["box_height"][-1] == pytest.approx(0.002, abs=1e-9)
+    assert columns["box_dx"][-1] == pytest.approx(0.015, abs=1e-9) and columns["box_dy"][-1] == pytest.approx(0.0, abs=1e-9)
+    assert columns["box_offset"][-1] == pytest.approx(0.015, abs=1e-9)
+
+
+def test_onto_must_name_another_frame_and_start_with_a_movable_object(tmp_path):
+    from stl_lfd.errors import ConfigError
+
+    for bad, message in (
+        (ONTO_SCENE.replace("onto: shelf", "onto: nowhere"), "'frames.box.onto' must name another frame"),
+        (ONTO_SCENE.replace("[shelf]}", "[shelf], onto: box}"), "'frames.shelf.onto': the frame's first object, shelf, must be movable"),
+        (ONTO_SCENE.replace("onto: shelf", "onto: shelf, into: shelf"), "either into a hole or onto a target"),
+    ):
+        (tmp_path / "bad.yaml").write_text(bad)
+        with pytest.raises(ConfigError, match=message):
+            load_scene(str(tmp_path / "bad.yaml"))
