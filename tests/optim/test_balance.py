@@ -9,8 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stl_lfd.optim.methods.balance import output_scales
-from stl_lfd.optim.methods.composition import balanced_values
+from stl_lfd.optim.methods.balance import balanced_values, output_scales
 from stl_lfd.stl import Semantics
 from tests.conftest import ROOT
 

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from stl_lfd.stl import Semantics
+
 MAD_TO_STD = 1.4826  # the median absolute deviation of a normal distribution, in standard deviations
 
 
@@ -33,3 +35,14 @@ def output_scales(values: np.ndarray) -> np.ndarray:
         spreads = (MAD_TO_STD * np.median(np.abs(known - np.median(known))), np.std(known), np.max(np.abs(known)))
         scales[column] = next((spread for spread in spreads if spread > 0), 1.0)
     return scales
+
+
+def balanced_values(outputs: np.ndarray, scales: np.ndarray, parts: int, route_parts: tuple[int, ...], semantics: Semantics, groups: int = 1) -> np.ndarray:
+    """`n x (m + r)` observed outputs -> `n` composed values, each output divided by its scale
+    first and each part raised to its routes' (as the acquisition composes its samples)."""
+    import torch
+
+    from stl_lfd.optim.methods.composition import compose, through_routes  # torch: loaded once a model proposes
+
+    samples = through_routes(torch.as_tensor(np.asarray(outputs, dtype=float) / scales), parts, route_parts)
+    return compose(samples, semantics, groups).numpy()

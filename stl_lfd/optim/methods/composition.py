@@ -114,10 +114,3 @@ def compose(values: torch.Tensor, semantics: Semantics, groups: int = 1) -> torc
     positive = (values * torch.softmax(-nu * positive_relative, dim=-1)).sum(dim=-1)
     minimum = minimum[..., 0]
     return torch.where(minimum > 0, positive, torch.where(minimum < 0, negative, torch.zeros_like(minimum)))
-
-
-def balanced_values(outputs: np.ndarray, scales: np.ndarray, parts: int, route_parts: tuple[int, ...], semantics: Semantics, groups: int = 1) -> np.ndarray:
-    """`n x (m + r)` observed outputs -> `n` composed values, each output divided by its scale
-    first and each part raised to its routes' (as the acquisition composes its samples)."""
-    samples = through_routes(torch.as_tensor(np.asarray(outputs, dtype=float) / scales), parts, route_parts)
-    return compose(samples, semantics, groups).numpy()

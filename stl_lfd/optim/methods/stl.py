@@ -19,9 +19,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from stl_lfd.optim.methods.balance import output_scales
+from stl_lfd.optim.methods.balance import balanced_values, output_scales
 from stl_lfd.optim.methods.base import Composition, Proposal, Request, SobolStart, from_unit, sobol_points, to_unit
-from stl_lfd.optim.methods.composition import balanced_values
 from stl_lfd.optim.methods.gp import fit_multi_output_gp, maximise_acquisition, single_threaded
 from stl_lfd.optim.methods.trust_region import trust_box, trust_region_length
 from stl_lfd.optim.methods.tuning import CompositeSettings
