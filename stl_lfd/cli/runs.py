@@ -61,7 +61,9 @@ def optimize(
     place: list[str] = typer.Option([], "--place", help=PLACE_HELP + " Replaces the task's placements."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="On stderr, only what runs and the verdict (no line per trial); errors still show."),
     dry_run: bool = typer.Option(
-        False, "--dry-run", help="Run no trial: print each parameter's range (mm, deg, s) and what the plans at the box's centre and corners say of each part of the spec."
+        False,
+        "--dry-run",
+        help="Run no trial: print each parameter's range (mm, deg, s) and what the plans at the box's centre and corners say of each part of the spec.",
     ),
 ) -> None:
     """Optimise a skill so that its execution satisfies the task's STL specification.

@@ -212,7 +212,9 @@ def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
     if into is not None and not isinstance(into, str):
         raise ConfigError(f"{path}: '{where}.into' must name the frame whose hole the object goes into (got {shown(into)})")
     if onto is not None and (not isinstance(onto, str) or into is not None):
-        raise ConfigError(f"{path}: '{where}.onto' must name the frame the object is put on, and a frame goes either into a hole or onto a target (got {shown(onto)})")
+        raise ConfigError(
+            f"{path}: '{where}.onto' must name the frame the object is put on, and a frame goes either into a hole or onto a target (got {shown(onto)})"
+        )
     frame = SceneFrame(name, pose, tuple(str(item) for item in objects), area, symmetry, pose.yaw, rim, into, onto)  # type: ignore[arg-type]
     check_area(frame, pose, str(path))
     return frame

@@ -49,7 +49,9 @@ def path_through(rng, waypoints):
         s = np.clip((t - knots[k]) / (knots[k + 1] - knots[k]), 0.0, 1.0)
         path[i] = points[k] + (points[k + 1] - points[k]) * (10 * s**3 - 15 * s**4 + 6 * s**5)
     window = np.hanning(31) / np.hanning(31).sum()
-    sway = np.stack([np.convolve(rng.normal(0, 1, times.size), window, mode="same") for _ in range(3)], axis=1) * 0.004  # a slow sway of the guiding hand, under a millimetre
+    sway = (
+        np.stack([np.convolve(rng.normal(0, 1, times.size), window, mode="same") for _ in range(3)], axis=1) * 0.004
+    )  # a slow sway of the guiding hand, under a millimetre
     return times, path + sway + rng.normal(0, 0.0003, path.shape)
 
 

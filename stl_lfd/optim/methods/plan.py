@@ -28,8 +28,8 @@ import numpy as np
 import torch
 from torch.quasirandom import SobolEngine
 
-from stl_lfd.optim.methods.base import Proposal, Request, SearchMethod, from_unit, to_unit
 from stl_lfd.optim.methods.balance import balanced_values, output_scales
+from stl_lfd.optim.methods.base import Proposal, Request, SearchMethod, from_unit, to_unit
 from stl_lfd.optim.methods.composition import compose, through_routes
 from stl_lfd.optim.methods.gp import single_threaded
 from stl_lfd.optim.methods.plan_model import Plan, Scorer, difference_posterior

@@ -38,8 +38,8 @@ from stl_lfd.errors import RunError
 from stl_lfd.files import UnreadableFile, check_output_folder, write_atomically
 from stl_lfd.hsmm import HSMM, load_model, save_model
 from stl_lfd.optim.runs.lock import RunLock
-from stl_lfd.optim.runs.trial_log import TrialLog, decoded
 from stl_lfd.optim.runs.records import Pending, finite, trial_from_json, trial_problem, trial_to_json
+from stl_lfd.optim.runs.trial_log import TrialLog, decoded
 from stl_lfd.optim.settings import SINGLE_SKILL
 from stl_lfd.optim.summary import Summary
 from stl_lfd.optim.task import Task, load_task

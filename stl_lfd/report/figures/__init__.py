@@ -17,10 +17,10 @@ from __future__ import annotations
 
 from stl_lfd.report.figures.base import FigureSpec, ReportOptions, save_figure
 from stl_lfd.report.figures.contact import Forces, ObjectSignals, Wrench
+from stl_lfd.report.figures.learned import SkillDrawing, SkillFigure
 from stl_lfd.report.figures.paths import RegionDistances, Tilt, Trajectories
 from stl_lfd.report.figures.scores import Compare, Components, GpSlices, Robustness
 from stl_lfd.report.figures.skills import Durations, Transitions
-from stl_lfd.report.figures.learned import SkillDrawing, SkillFigure
 from stl_lfd.report.figures.sweep import SweepCurves
 from stl_lfd.report.figures.tracking import Tracking
 
