@@ -13,7 +13,7 @@ from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_SEED, MAX_TRIALS, MAX_WORKERS
 from stl_lfd.optim.method_registry import method_class, method_names, settings_class, tuned_method_names
 from stl_lfd.rotations import ROTATION_COLUMNS
-from stl_lfd.yamlfile import check_keys, integer, number, settings_from_yaml, settings_to_yaml, shown
+from stl_lfd.yamlfile import check_keys, integer, number, settings_from_yaml, settings_to_yaml, shown, vector
 
 SINGLE_SKILL = "skill"  # the name of the one skill of a task without a behaviour
 TRANSITIONS = ("none", "band", "full")
@@ -28,13 +28,15 @@ class MeanParameters:
     `frame` names the frame of a TP-HSMM in which they move (bounds from that frame's
     covariance). For a skill with orientation, `rx, ry, rz` move the state's mean orientation
     (its rotation vector relative to the skill's reference orientation, in radians), bounded by
-    the state's orientation covariance."""
+    the state's orientation covariance. `offset` (m, `(lower, upper)`) bounds the positions
+    by that much around the mean instead of `beta` standard deviations."""
 
     components: tuple[int, ...] = ()
     coordinates: tuple[str, ...] = POSITION_COORDINATES
     beta: float = 2.0
     together: bool = False
     frame: str | None = None  # for a TP-HSMM: the frame the means move in
+    offset: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         _check_states(self.components, "means.components")
@@ -43,6 +45,8 @@ class MeanParameters:
             raise ConfigError(f"'means.coordinates' may hold {', '.join(COORDINATES)} (got {shown(list(self.coordinates))})")
         if not self.beta > 0:
             raise ConfigError(f"'means.beta' must be positive (got {self.beta})")
+        if self.offset is not None and not (len(self.offset) == 2 and self.offset[0] <= 0 <= self.offset[1] and self.offset[0] < self.offset[1]):
+            raise ConfigError(f"'means.offset' must be [lower, upper] in metres with lower <= 0 <= upper, lower < upper (got {shown(list(self.offset))})")
 
 
 @dataclass(frozen=True)
@@ -158,7 +162,9 @@ def parameters_from_yaml(data: Any, path: Path, where: str) -> Parameters:
     check_keys(data, ("means", "durations", "transitions"), path, where)
     means, durations = MeanParameters(), DurationParameters()
     if "means" in data:
-        item = check_keys(data["means"], ("components", "coordinates", "beta", "together", "frame"), path, f"{where}.means", required=("components",))
+        item = check_keys(data["means"], ("components", "coordinates", "beta", "together", "frame", "offset"), path, f"{where}.means", required=("components",))
+        if "offset" in item and "beta" in item:
+            raise ConfigError(f"{path}: '{where}.means' gives both 'beta' and 'offset': the positions' bounds are one or the other")
         if "frame" in item and not isinstance(item["frame"], str):
             raise ConfigError(f"{path}: '{where}.means.frame' must be the name of one of the model's frames (got {shown(item['frame'])})")
         if not isinstance(item.get("together", False), bool):
@@ -173,6 +179,7 @@ def parameters_from_yaml(data: Any, path: Path, where: str) -> Parameters:
             beta=number(item.get("beta", 2.0), path, f"{where}.means.beta", positive=True),
             together=item.get("together", False),
             frame=item.get("frame"),
+            offset=vector(item["offset"], 2, path, f"{where}.means.offset") if "offset" in item else None,
         )
     if "durations" in data:
         item = check_keys(data["durations"], ("components", "width"), path, f"{where}.durations", required=("components",))

@@ -21,7 +21,7 @@ import numpy as np
 
 from stl_lfd.errors import ConfigError, ModelError
 from stl_lfd.hsmm import HSMM
-from stl_lfd.optim.settings import SINGLE_SKILL, Parameters
+from stl_lfd.optim.settings import SINGLE_SKILL, MeanParameters, Parameters
 from stl_lfd.rotations import ROTATION_COLUMNS
 
 
@@ -113,10 +113,11 @@ def build_space(model: HSMM, parameters: Parameters, source: Path | str = "task"
             except ModelError as error:
                 key = f"{where}.means.frame" if means.frame is not None else f"{where}.means.coordinates"
                 raise ConfigError(f"{source}: '{key}': {error}") from None
-            value, spread = model.means_[group[0], coordinate], means.beta * stds[coordinate]
+            value = model.means_[group[0], coordinate]
+            low, high = _mean_bounds(means, name, value, stds[coordinate])
             frame = f"{means.frame}." if means.frame is not None else ""
             kind = "orient" if name in ROTATION_COLUMNS else "mean"
-            add(f"{kind}[{label}].{frame}{name}", value, value - spread, value + spread)
+            add(f"{kind}[{label}].{frame}{name}", value, low, high)
             mean_slots.append((group, coordinate))
 
     durations = parameters.durations
@@ -140,6 +141,13 @@ def build_space(model: HSMM, parameters: Parameters, source: Path | str = "task"
         duration_slots=tuple(duration_slots),
         transition_slots=tuple(transition_slots),
     )
+
+
+def _mean_bounds(means: MeanParameters, coordinate: str, value: float, std: float) -> tuple[float, float]:
+    """A mean's bounds: `means.offset` around it for a position, else `beta` standard deviations."""
+    if means.offset is not None and coordinate not in ROTATION_COLUMNS:
+        return value + means.offset[0], value + means.offset[1]
+    return value - means.beta * std, value + means.beta * std
 
 
 def transition_entries(K: int, kind: str) -> list[tuple[int, int]]:

@@ -181,6 +181,9 @@ def _parameters_to_yaml(parameters: Parameters) -> dict[str, Any]:
         block["means"] = {"components": list(means.components), "coordinates": list(means.coordinates), "beta": means.beta, "together": means.together}
         if means.frame is not None:
             block["means"]["frame"] = means.frame
+        if means.offset is not None:
+            block["means"]["offset"] = list(means.offset)
+            del block["means"]["beta"]
     if durations.components:
         components = durations.components if isinstance(durations.components, str) else list(durations.components)
         block["durations"] = {"components": components, "width": durations.width}

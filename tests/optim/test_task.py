@@ -1,6 +1,8 @@
 from pathlib import Path
 
+import numpy as np
 import pytest
+import yaml
 
 from stl_lfd.errors import ConfigError
 from stl_lfd.optim import Overrides, build_search_space, load_task
@@ -148,3 +150,25 @@ def test_a_budget_below_the_initial_trials_lowers_them_for_a_new_run_with_a_note
     assert f"{initial - 1} is below the task's {initial} initial trials" in note and note.endswith(f"is {initial - 1} for this run")
     for unchanged in (Overrides(trials=initial), Overrides(trials=2, initial=3), Overrides(seed=1)):
         assert unchanged.fitted_to(task) == (unchanged, "")
+
+
+def test_means_may_be_bounded_by_an_offset_in_metres_instead_of_standard_deviations(tmp_path, learned_model):
+    task = load_task(write_task(tmp_path, "parameters:\n  means: {components: [2], offset: [-0.02, 0.03]}\n"))
+    space = build_search_space({"skill": learned_model}, task.parameters, task.source)
+    assert np.allclose(space.lower - space.initial, -0.02) and np.allclose(space.upper - space.initial, 0.03)
+    again = tmp_path / "again.yaml"
+    again.write_text(yaml.safe_dump(task.to_yaml_dict()))
+    assert load_task(again).parameters == task.parameters
+
+
+@pytest.mark.parametrize(
+    "means, message",
+    [
+        ("{components: [2], offset: [0.01, 0.03]}", r"'means.offset' must be \[lower, upper\] in metres with lower <= 0 <= upper"),
+        ("{components: [2], offset: [-0.01]}", "must be a list of 2 numbers"),
+        ("{components: [2], offset: [-0.01, 0.01], beta: 3}", "gives both 'beta' and 'offset'"),
+    ],
+)
+def test_an_offset_that_makes_no_sense_is_refused(tmp_path, means, message):
+    with pytest.raises(ConfigError, match=message):
+        load_task(write_task(tmp_path, f"parameters:\n  means: {means}\n"))
