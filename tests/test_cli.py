@@ -6,6 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.core import TyperGroup
 from typer.main import get_command
@@ -170,3 +171,16 @@ def _lower_module_lines() -> list[str]:
             if re.search(r"(^|[\s(])--[a-z]", text) and "stlopt " not in text:
                 found.append(f"{path.name}: {text!r}")
     return found
+
+
+def test_robustness_with_parts_prints_each_part_whose_composition_is_the_total():
+    from stl_lfd.stl import Semantics
+
+    result = CliRunner().invoke(app, ["robustness", str(ROOT / "specs" / "phi1.stl"), str(ROOT / "examples" / "three_regions.csv"), "--json", "--parts"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert list(data["parts"]) == ["F L1", "G[12, 17] L2", "F L3", "F[8, 12] L4"]
+    composed = Semantics("new", 1.0).kernels.conjunction(np.array(list(data["parts"].values())))
+    assert float(composed) == pytest.approx(data["robustness"], rel=1e-12)
+    plain = CliRunner().invoke(app, ["robustness", str(ROOT / "specs" / "phi1.stl"), str(ROOT / "examples" / "three_regions.csv")])
+    assert "parts" not in plain.stdout and len(plain.stdout.splitlines()) == 1

@@ -20,6 +20,7 @@ def robustness(
     semantics: SemanticsOption = typer.Option(SemanticsOption(DEFAULT_SEMANTICS), help="The paper's new robustness, or the classic space robustness."),
     nu: float = typer.Option(1.0, help="Sharpness of the new robustness (> 0); larger is closer to classic."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object instead of the bare number."),
+    parts: bool = typer.Option(False, "--parts", help="Also print each part of the spec's top-level conjunction: its robustness and its text."),
 ) -> None:
     """Print the robustness of a recorded signal with respect to a specification.
 
@@ -27,6 +28,8 @@ def robustness(
     satisfies the specification. Without --json, stdout gets the number and stderr a verdict
     naming the semantics. The default is the paper's new robustness, as 'stlopt optimize'
     scores with; --semantics classic gives the space robustness (the verdicts agree).
+    --parts adds a line per part of the spec's top-level conjunction (its robustness, a tab,
+    its text): which part fails, and by how much in its own units.
 
     Example:
 
@@ -37,10 +40,12 @@ def robustness(
     from stl_lfd.stl.evaluate import evaluate_file
 
     with user_errors():
-        result = evaluate_file(spec, signal_csv, semantics.value, nu)
+        result = evaluate_file(spec, signal_csv, semantics.value, nu, parts=parts)
     if as_json:
         print(json.dumps(result.to_json()))
     else:
         print(f"{result.robustness:.10g}")
+        for name, value in (result.parts or {}).items():
+            print(f"{value:.10g}\t{name}")
         which = "classic robustness" if semantics is SemanticsOption.classic else f"new robustness, nu = {nu:g}"
         print(f"{'satisfied' if result.satisfied else 'violated'} ({which})", file=sys.stderr)
