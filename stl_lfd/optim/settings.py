@@ -158,6 +158,24 @@ def located(path: Path) -> Iterator[None]:
         raise ConfigError(f"{path}: {error}") from None
 
 
+def parameters_to_yaml(parameters: Parameters) -> dict[str, Any]:
+    """The task-file form of a selection; blocks that select nothing are left out."""
+    means, durations = parameters.means, parameters.durations
+    block: dict[str, Any] = {}
+    if means.components:
+        block["means"] = {"components": list(means.components), "coordinates": list(means.coordinates), "beta": means.beta, "together": means.together}
+        if means.frame is not None:
+            block["means"]["frame"] = means.frame
+        if means.offset is not None:
+            block["means"]["offset"] = list(means.offset)
+            del block["means"]["beta"]
+    if durations.components:
+        components = durations.components if isinstance(durations.components, str) else list(durations.components)
+        block["durations"] = {"components": components, "width": durations.width}
+    block["transitions"] = parameters.transitions
+    return block
+
+
 def parameters_from_yaml(data: Any, path: Path, where: str) -> Parameters:
     check_keys(data, ("means", "durations", "transitions"), path, where)
     means, durations = MeanParameters(), DurationParameters()

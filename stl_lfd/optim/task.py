@@ -14,7 +14,17 @@ from typing import Any
 from stl_lfd.choices import DEFAULT_SEMANTICS, SEMANTICS
 from stl_lfd.errors import ConfigError
 from stl_lfd.limits import MAX_PLACEMENTS, MAX_STATES, samples_problem
-from stl_lfd.optim.settings import OPTIMIZER_KEYS, SINGLE_SKILL, Optimizer, Parameters, choice, located, optimizer_from_yaml, parameters_from_yaml
+from stl_lfd.optim.settings import (
+    OPTIMIZER_KEYS,
+    SINGLE_SKILL,
+    Optimizer,
+    Parameters,
+    choice,
+    located,
+    optimizer_from_yaml,
+    parameters_from_yaml,
+    parameters_to_yaml,
+)
 from stl_lfd.poses import Pose
 from stl_lfd.sim.executor import DEFAULT_TIMEOUT, Command
 from stl_lfd.sim.registry import DEFAULT_BACKEND, backend_class, backend_names
@@ -84,7 +94,7 @@ class Task:
             data["command"] = self.command.to_dict()
         if self.placements:
             data["placements"] = placements_to_yaml(self.placements)
-        blocks = {name: _parameters_to_yaml(parameters) for name, parameters in self.parameters.items()}
+        blocks = {name: parameters_to_yaml(parameters) for name, parameters in self.parameters.items()}
         data["parameters"] = blocks[SINGLE_SKILL] if self.behaviour is None else blocks
         opt = self.optimizer
         data["optimizer"] = {"method": opt.method, "initial": opt.initial, "trials": opt.trials, "seed": opt.seed}
@@ -171,24 +181,6 @@ TOP_KEYS = (
 def placements_to_yaml(placements: tuple[dict[str, Pose], ...]) -> list[dict[str, Any]]:
     """The task-file form of `placements`: a list of frame -> {position, yaw}."""
     return [{name: pose.as_dict() for name, pose in placement.items()} for placement in placements]
-
-
-def _parameters_to_yaml(parameters: Parameters) -> dict[str, Any]:
-    """The task-file form of a selection; blocks that select nothing are left out."""
-    means, durations = parameters.means, parameters.durations
-    block: dict[str, Any] = {}
-    if means.components:
-        block["means"] = {"components": list(means.components), "coordinates": list(means.coordinates), "beta": means.beta, "together": means.together}
-        if means.frame is not None:
-            block["means"]["frame"] = means.frame
-        if means.offset is not None:
-            block["means"]["offset"] = list(means.offset)
-            del block["means"]["beta"]
-    if durations.components:
-        components = durations.components if isinstance(durations.components, str) else list(durations.components)
-        block["durations"] = {"components": components, "width": durations.width}
-    block["transitions"] = parameters.transitions
-    return block
 
 
 def load_task(path: str | Path) -> Task:
