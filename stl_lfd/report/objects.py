@@ -98,6 +98,33 @@ def constrained_object_signals(run: RunData) -> list[str]:
     return [signal for signal in run.thresholds if signal.startswith(prefixes) and signal in recorded]
 
 
+SIGNAL_WORDS = {
+    "depth": "how deep {name}'s lowest point is below {target}'s rim (m)",
+    "offset": "{name}'s distance from {target} (m)",
+    "height": "how high {name}'s lowest point is above {target}'s origin (m)",
+    "dx": "{name}'s offset from {target} along its x axis (m)",
+    "dy": "{name}'s offset from {target} along its y axis (m)",
+    "tilt": "{name}'s tilt from upright (rad)",
+    "speed": "{name}'s speed (m/s)",
+    "held": "whether the fingers hold {name} (1 or 0)",
+    "x": "{name}'s x (m)",
+    "y": "{name}'s y (m)",
+    "z": "{name}'s z (m)",
+}
+
+
+def signal_in_words(signal: str, scene) -> str:
+    """`box_height: how high box's lowest point is above shelf's origin (m)`, from the scene's
+    own names (the frame, and the hole or target it goes into or onto)."""
+    frame = next((frame for frame in scene.frames if signal.startswith(f"{frame.name}_")), None)
+    if frame is None:
+        return signal
+    kind = signal[len(frame.name) + 1 :]
+    target = frame.into or frame.onto or "its target"
+    words = SIGNAL_WORDS.get(kind)
+    return f"{signal}, {words.format(name=frame.name, target=target)}" if words else signal
+
+
 def recorded_signals(run: RunData) -> set[str]:
     """The signals any of the run's trials recorded."""
     return set().union(*(table.columns for table in run.signals.values()))

@@ -171,6 +171,7 @@ def test_a_contact_run_draws_its_objects_and_the_specs_thresholds_on_their_signa
     assert_picture(report / "objects.png")
     page = page_text(report / "index.html")
     assert "Grey: the objects the task is about" in page and "dashed green, the spec's thresholds" in page
+    assert "shaft_depth, how deep shaft's lowest point is below holder's rim (m)" in page  # the scene's own names
     run = load_run(tmp_path / "run")
     from stl_lfd.report import objects
 
@@ -248,3 +249,15 @@ def test_a_learned_skill_and_a_sweep_are_drawn_by_registered_figures(tmp_path):
     assert (tmp_path / "skill.png").stat().st_size > 1000
     assert "2 demonstrations" in skill.caption(drawing) and "3 states" in skill.caption(drawing)
     assert figure_named("sweep").name == "sweep"
+
+
+def test_an_object_signal_is_described_with_the_scenes_own_names(tmp_path):
+    from stl_lfd.report.objects import signal_in_words
+    from stl_lfd.sim import load_scene
+    from tests.sim.test_outcome import ONTO_SCENE
+
+    (tmp_path / "onto.yaml").write_text(ONTO_SCENE)
+    scene = load_scene(str(tmp_path / "onto.yaml"))
+    assert signal_in_words("box_height", scene) == "box_height, how high box's lowest point is above shelf's origin (m)"
+    assert signal_in_words("box_offset", scene) == "box_offset, box's distance from shelf (m)"
+    assert signal_in_words("force", scene) == "force"

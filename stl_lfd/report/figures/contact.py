@@ -101,8 +101,8 @@ class ObjectSignals(FigureSpec):
         return objects.object_signals(run, per_trial)
 
     def caption(self, run: RunData) -> str:
+        shown = "; ".join(objects.signal_in_words(signal, run.scene) for signal in objects.constrained_object_signals(run))
         return (
             f"The signals of the scene's objects that the spec constrains, over time per trial: {numbered_in_words(run)}; dashed green, the spec's "
-            "thresholds (the shaft's depth below the hole's rim and its offset from the hole's axis in m, its tilt from upright in rad, "
-            "its speed in m/s, held 1 while both fingers touch it)."
+            f"thresholds. Shown: {shown}."
         )
