@@ -83,7 +83,10 @@ def corners(lower: np.ndarray, upper: np.ndarray, count: int) -> np.ndarray:
     if 2**dimension <= count:
         choices = (np.arange(2**dimension)[:, None] >> np.arange(dimension)) & 1
     else:
-        choices = np.random.default_rng(0).integers(0, 2, size=(count, dimension))
+        rng, choices = np.random.default_rng(0), np.empty((0, dimension), dtype=int)
+        while len(choices) < count:  # distinct corners, in the order drawn
+            drawn = np.vstack([choices, rng.integers(0, 2, size=(count, dimension))])
+            choices = drawn[np.sort(np.unique(drawn, axis=0, return_index=True)[1])][:count]
     return np.where(choices == 1, upper, lower)
 
 

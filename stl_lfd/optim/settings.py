@@ -29,7 +29,8 @@ class MeanParameters:
     covariance). For a skill with orientation, `rx, ry, rz` move the state's mean orientation
     (its rotation vector relative to the skill's reference orientation, in radians), bounded by
     the state's orientation covariance. `offset` (m, `(lower, upper)`) bounds the positions
-    by that much around the mean instead of `beta` standard deviations."""
+    by that much around the mean instead of `beta` standard deviations (which still bounds
+    the orientation coordinates)."""
 
     components: tuple[int, ...] = ()
     coordinates: tuple[str, ...] = POSITION_COORDINATES
@@ -168,7 +169,6 @@ def parameters_to_yaml(parameters: Parameters) -> dict[str, Any]:
             block["means"]["frame"] = means.frame
         if means.offset is not None:
             block["means"]["offset"] = list(means.offset)
-            del block["means"]["beta"]
     if durations.components:
         components = durations.components if isinstance(durations.components, str) else list(durations.components)
         block["durations"] = {"components": components, "width": durations.width}
@@ -181,8 +181,6 @@ def parameters_from_yaml(data: Any, path: Path, where: str) -> Parameters:
     means, durations = MeanParameters(), DurationParameters()
     if "means" in data:
         item = check_keys(data["means"], ("components", "coordinates", "beta", "together", "frame", "offset"), path, f"{where}.means", required=("components",))
-        if "offset" in item and "beta" in item:
-            raise ConfigError(f"{path}: '{where}.means' gives both 'beta' and 'offset': the positions' bounds are one or the other")
         if "frame" in item and not isinstance(item["frame"], str):
             raise ConfigError(f"{path}: '{where}.means.frame' must be the name of one of the model's frames (got {shown(item['frame'])})")
         if not isinstance(item.get("together", False), bool):

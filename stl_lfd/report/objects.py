@@ -114,9 +114,10 @@ SIGNAL_WORDS = {
 
 
 def signal_in_words(signal: str, scene) -> str:
-    """`box_height: how high box's lowest point is above shelf's origin (m)`, from the scene's
+    """`box_height, how high box's lowest point is above shelf's origin (m)`, from the scene's
     own names (the frame, and the hole or target it goes into or onto)."""
-    frame = next((frame for frame in scene.frames if signal.startswith(f"{frame.name}_")), None)
+    frames = [frame for frame in scene.frames if signal.startswith(f"{frame.name}_")]
+    frame = max(frames, key=lambda frame: len(frame.name), default=None)  # box_lid_x is box_lid's
     if frame is None:
         return signal
     kind = signal[len(frame.name) + 1 :]

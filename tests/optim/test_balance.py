@@ -31,6 +31,15 @@ def test_a_column_that_never_varies_or_is_unknown_still_has_a_positive_scale():
     assert output_scales(values).tolist() == [0.5, 1.0, 1.0]
 
 
+def test_fewer_trials_than_show_a_spread_leave_the_parts_as_recorded():
+    from stl_lfd.optim.methods.stl import PartsData
+
+    two = PartsData(np.array([[0.0001, -3.0], [0.0002, -2.0]]), np.empty((2, 0)), Semantics("classic"))
+    assert (
+        two.balanced().scales is None and PartsData(np.vstack([two.parts, [[0.0, -1.0]]]), np.empty((3, 0)), Semantics("classic")).balanced().scales is not None
+    )
+
+
 @pytest.mark.parametrize("semantics", [Semantics("classic"), Semantics("new", 1.0)])
 def test_balancing_keeps_the_sign_of_the_composed_robustness(semantics):
     rng = np.random.default_rng(1)

@@ -166,7 +166,6 @@ def test_means_may_be_bounded_by_an_offset_in_metres_instead_of_standard_deviati
     [
         ("{components: [2], offset: [0.01, 0.03]}", r"'means.offset' must be \[lower, upper\] in metres with lower <= 0 <= upper"),
         ("{components: [2], offset: [-0.01]}", "must be a list of 2 numbers"),
-        ("{components: [2], offset: [-0.01, 0.01], beta: 3}", "gives both 'beta' and 'offset'"),
     ],
 )
 def test_an_offset_that_makes_no_sense_is_refused(tmp_path, means, message):

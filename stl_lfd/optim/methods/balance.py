@@ -18,6 +18,7 @@ import numpy as np
 from stl_lfd.stl import Semantics
 
 MAD_TO_STD = 1.4826  # the median absolute deviation of a normal distribution, in standard deviations
+MIN_TRIALS = 3  # fewer trials do not show a spread: one trial's value is no scale of a part
 
 
 def output_scales(values: np.ndarray) -> np.ndarray:

@@ -28,7 +28,7 @@ import numpy as np
 import torch
 from torch.quasirandom import SobolEngine
 
-from stl_lfd.optim.methods.balance import balanced_values, output_scales
+from stl_lfd.optim.methods.balance import MIN_TRIALS, balanced_values, output_scales
 from stl_lfd.optim.methods.base import Proposal, Request, SearchMethod, from_unit, to_unit
 from stl_lfd.optim.methods.composition import compose, through_routes
 from stl_lfd.optim.methods.gp import single_threaded
@@ -73,10 +73,11 @@ class PlanSearch(SearchMethod):
         with single_threaded():
             plan = self.plan_for(request.history)
             unit, tried = to_unit(X, bounds), to_unit(tried, bounds)
+            if design and len(tried):
+                scales = self.scales(self.observed_outputs(succeeded), plan, request.seed) if self.settings.balance else None
+                return from_unit(self.spread_point(self.pool(request.seed), tried, plan, scales), bounds)
             outputs = self.observed_outputs(succeeded)
             scales = self.scales(outputs, plan, request.seed)
-            if design and len(tried):
-                return from_unit(self.spread_point(self.pool(request.seed), tried, plan, scales), bounds)
             difference = difference_posterior(unit, outputs - plan(unit) if len(X) else outputs, self.problem.features)
             if scales is not None:
                 Y = balanced_values(outputs, scales, len(composition.names), composition.route_parts, composition.semantics, composition.groups)
@@ -91,11 +92,11 @@ class PlanSearch(SearchMethod):
 
     def scales(self, outputs: np.ndarray, plan: Plan, seed: int) -> np.ndarray | None:
         """Each output's scale (`balance.output_scales`): the spread of the `n x o` observed
-        `outputs`, or before any trial of the plans over the pool; None without balancing, or
-        with a single output."""
+        `outputs`, or before `MIN_TRIALS` trials the spread of the plans over the pool; None
+        without balancing, or with a single output."""
         if not self.settings.balance or outputs.shape[1] < 2:
             return None
-        return output_scales(outputs if len(outputs) else plan(self.pool(seed)))
+        return output_scales(outputs if len(outputs) >= MIN_TRIALS else plan(self.pool(seed)))
 
     def plan_for(self, history: Sequence[Trial]) -> Plan:
         """The plan of a point as the robot will execute it: through the tracking model learned

@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from stl_lfd.optim.methods.balance import balanced_values, output_scales
+from stl_lfd.optim.methods.balance import MIN_TRIALS, balanced_values, output_scales
 from stl_lfd.optim.methods.base import Composition, Proposal, Request, SobolStart, from_unit, sobol_points, to_unit
 from stl_lfd.optim.methods.gp import fit_multi_output_gp, maximise_acquisition, single_threaded
 from stl_lfd.optim.methods.trust_region import trust_box, trust_region_length
@@ -46,8 +46,9 @@ class PartsData:
 
     def balanced(self) -> "PartsData":
         """The same data with each output's scale (`balance.output_scales`) when there are
-        several outputs to weigh against each other."""
-        return replace(self, scales=output_scales(self.outputs)) if self.outputs.shape[1] > 1 else self
+        several outputs to weigh against each other and `MIN_TRIALS` trials to show spreads."""
+        outputs = self.outputs
+        return replace(self, scales=output_scales(outputs)) if outputs.shape[1] > 1 and len(outputs) >= MIN_TRIALS else self
 
     def composed(self, Y: np.ndarray) -> np.ndarray:
         """`n` values the search compares trials by: their robustness `Y`, or with scales the
