@@ -9,6 +9,7 @@ from pathlib import Path
 from typer.testing import CliRunner
 
 from stl_lfd.cli import app
+from tests.processes import deliverable_sigint, interrupt
 
 runner = CliRunner()
 STLOPT = str(Path(sys.executable).parent / "stlopt")
@@ -46,14 +47,15 @@ def test_addresses_are_written_as_a_browser_takes_them():
 
 
 def test_every_network_is_warned_of_and_ctrl_c_says_it_stopped(tmp_path):
-    process = subprocess.Popen([STLOPT, "dashboard", str(tmp_path), "--host", "0.0.0.0", "--port", "0"], stderr=subprocess.PIPE, text=True)
+    command = [STLOPT, "dashboard", str(tmp_path), "--host", "0.0.0.0", "--port", "0"]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=deliverable_sigint)
     try:
         warning, address = process.stderr.readline(), process.stderr.readline()
         assert warning.startswith("warning: listening on 0.0.0.0: anyone who can reach this machine") and address.startswith(
             "stlopt dashboard on http://0.0.0.0:"
         )
-        process.send_signal(signal.SIGINT)
-        assert process.wait(timeout=30) == -signal.SIGINT  # interrupted, as every command is
-        assert process.stderr.read() == "dashboard stopped\n"
+        _, rest = interrupt(process)
+        assert process.returncode == -signal.SIGINT  # interrupted, as every command is
+        assert rest == "dashboard stopped\n"
     finally:
         process.kill()
