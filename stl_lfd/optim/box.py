@@ -16,6 +16,8 @@ import numpy as np
 
 from stl_lfd.hsmm import HSMM
 from stl_lfd.optim.inputs import TaskInputs, resolve, task_models
+from stl_lfd.optim.methods.base import to_unit
+from stl_lfd.optim.methods.plan_model import Plan
 from stl_lfd.optim.objective import objective_for
 from stl_lfd.optim.task import Overrides, Task
 
@@ -67,7 +69,8 @@ def box_report(inputs: TaskInputs, models: dict[str, HSMM], max_corners: int = M
     """The box of the task `inputs` on its skills `models` (see the module docstring)."""
     space, objective = objective_for(inputs, models, execute=False)
     points = np.vstack([space.initial, (space.lower + space.upper) / 2, corners(space.lower, space.upper, max_corners)])
-    values = _planned(objective.plan_score(), points)[:, : len(objective.composition.names)]
+    plan = Plan(objective.plan_score(), space.bounds)  # a point without a plan gives NaN
+    values = plan(to_unit(points, space.bounds))[:, : len(objective.composition.names)]
     groups = values.reshape(len(points), objective.composition.groups, -1)  # a group of the parts per placement
     whole = objective.parts.compose(np.nan_to_num(groups, nan=-np.inf)).min(axis=1)
     columns = [*zip(objective.composition.names, values.T), *([("the whole spec", whole)] if values.shape[1] > 1 else [])]
@@ -88,21 +91,6 @@ def corners(lower: np.ndarray, upper: np.ndarray, count: int) -> np.ndarray:
             drawn = np.vstack([choices, rng.integers(0, 2, size=(count, dimension))])
             choices = drawn[np.sort(np.unique(drawn, axis=0, return_index=True)[1])][:count]
     return np.where(choices == 1, upper, lower)
-
-
-def _planned(score, points: np.ndarray) -> np.ndarray:
-    """The plans' part values at `points`; a point without a plan gives NaN."""
-    try:
-        return np.asarray(score(points), dtype=float)
-    except Exception:  # one point without a plan fails the batch: plan them one by one
-        rows = []
-        for point in points:
-            try:
-                rows.append(np.asarray(score(point[None]), dtype=float)[0])
-            except Exception:
-                rows.append(None)
-        width = len(next(row for row in rows if row is not None)) if any(row is not None for row in rows) else 0
-        return np.array([row if row is not None else np.full(width, np.nan) for row in rows])
 
 
 def _shown(name: str, initial: float, lower: float, upper: float) -> tuple[str, float, float, float]:
