@@ -39,7 +39,8 @@ def rollout(
     """Execute a skill model or a behaviour once and write the recorded signals
     (t,x,y,z,gripper,force,qx,qy,qz,qw,tilt,fx,fy,fz,tx,ty,tz, then NAME_x,NAME_y,NAME_z and
     NAME_tilt for each object frame of the scene, then the outcome signals NAME_speed,
-    NAME_held, NAME_depth, NAME_offset where the scene has them, and the orientation
+    NAME_held, NAME_depth, NAME_offset (into a hole), NAME_height, NAME_dx, NAME_dy,
+    NAME_offset (onto a target) where the scene has them, and the orientation
     NAME_qx, NAME_qy, NAME_qz, NAME_qw of each object the hand can carry).
 
     Examples:
