@@ -2,9 +2,9 @@
 action, how far the wrist's force rises above what it read just before, for the unoptimised
 behaviour of each task on each engine (a real arm reads no spike there).
 
-    python -m benchmarks.bench_joins [--tasks T ...] [--engines pybullet mujoco]
+    python -m benchmarks.bench_joins [--tasks T ...] [--engines pybullet mujoco] [--label TEXT]
 
-Each join's excess is the largest force in the 0.5 s after it (from 0.05 s before) minus the
+Each join's excess is the largest force in the 1 s after it (from 0.05 s before) minus the
 median force over the 0.5 s before it; the table gives the largest excess of each task and
 engine, with the join where it happens, and writes one line per (task, engine) to
 `benchmarks/results/joins.jsonl`.
@@ -26,7 +26,7 @@ from stl_lfd.sim import execute
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "joins.jsonl"
 TASKS = ("phi3", "phi3_reorient", "shelf", "stack", "tray", "peg")
-BEFORE, AFTER, LEAD = 0.5, 0.5, 0.05  # s: the static window, the window after a join, and its lead
+BEFORE, AFTER, LEAD = 0.5, 1.0, 0.05  # s: the static window, the window after a join (a whole grasp), and its lead
 
 
 def joins(skills: np.ndarray, times: np.ndarray) -> list[tuple[float, str]]:
@@ -65,12 +65,13 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--tasks", nargs="+", default=list(TASKS))
     parser.add_argument("--engines", nargs="+", default=["pybullet", "mujoco"])
     parser.add_argument("--results", type=Path, default=RESULTS)
+    parser.add_argument("--label", default="", help="what code is measured (kept in each record)")
     arguments = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     print(f"{'task':<16}{'engine':<10}{'largest excess (N)':>20}  at")
     for task_name in arguments.tasks:
         for engine in arguments.engines:
-            record = measure(task_name, engine)
+            record = {"code": arguments.label, **measure(task_name, engine)}
             with open(arguments.results, "a") as stream:
                 stream.write(json.dumps(record) + "\n")
             print(f"{task_name:<16}{engine:<10}{record['largest_excess_n']:>20.2f}  {record['at']}", flush=True)

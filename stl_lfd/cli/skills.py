@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Optional
+from typing import TYPE_CHECKING, Callable, Optional
 
 import typer
 
@@ -14,7 +14,8 @@ from stl_lfd.cli.program import PlainUsage, app, user_errors
 from stl_lfd.limits import MAX_RESTARTS
 
 if TYPE_CHECKING:
-    from stl_lfd.hsmm import LearnedSkill
+    from stl_lfd.hsmm import LearnedSkill, SkillFiles
+    from stl_lfd.hsmm.states_choice import HeldOutScore
 
 
 @app.command(cls=PlainUsage)
@@ -22,7 +23,12 @@ def learn(
     demos_dir: Path = typer.Argument(
         ..., metavar="DEMOS_DIR", help="Folder of demonstration CSVs (t,x,y,z[,...]), one CSV, or a folder of such folders (one per skill)."
     ),
-    states: int = typer.Option(6, "-K", "--states", help="Number of HSMM states K."),
+    states: str = typer.Option(
+        "6",
+        "-K",
+        "--states",
+        help="Number of HSMM states K; auto (2-10) or a range such as 3-8 chooses it by held-out likelihood, printing the table.",
+    ),
     restarts: int = typer.Option(1, "--restarts", min=1, max=MAX_RESTARTS, help="EM starts: k-bins, then random segmentations; the most likely model is kept."),
     output: Optional[Path] = typer.Option(
         None,
@@ -64,6 +70,10 @@ def learn(
         stlopt learn demos/insert -o insert.npz --frames shaft,holder
         stlopt learn demos/
 
+    -K auto learns each K of 2-10 without one demonstration at a time and scores how likely the
+    held-out demonstration is under it (log-likelihood per sample); the smallest K within one
+    standard error of the best is kept. The table goes to stderr as each K is done.
+
     One demonstration does not vary, so by itself it would give states the optimiser cannot
     move; --min-spread (auto) then widens every state to at least 5 mm and 5 degrees, and
     every duration to at least 10 % of its mean.
@@ -71,18 +81,33 @@ def learn(
     from stl_lfd.files import check_output_file
     from stl_lfd.hsmm import learn_skills, skill_files
     from stl_lfd.hsmm.spread import parse_min_spread
+    from stl_lfd.hsmm.states_choice import parse_states
 
     with user_errors():
+        n_states = parse_states(states)
         files = skill_files(demos_dir, output)
         if plot is not None:
             check_output_file(plot, FIGURE_SUFFIXES, "figure")
         chosen = [name.strip() for name in frames.split(",")] if frames is not None else None
-        learned = learn_skills(files, states, sample_period, chosen, restarts, parse_min_spread(min_spread))  # all, before any is written
+        progress = _held_out_printer(n_states) if isinstance(n_states, range) else None
+        learned = learn_skills(files, n_states, sample_period, chosen, restarts, parse_min_spread(min_spread), progress)  # all, before any is written
         for skill in learned:
-            _write_and_show(skill, plot, states)
+            _write_and_show(skill, plot)
 
 
-def _write_and_show(skill: LearnedSkill, plot: Path | None, states: int) -> None:
+def _held_out_printer(candidates: range) -> Callable[[SkillFiles, int, HeldOutScore | None], None]:
+    """What prints the table of K on stderr as each K is done (a header before its first row)."""
+
+    def print_row(files: SkillFiles, states: int, score: HeldOutScore | None) -> None:
+        if states == candidates.start:
+            print(f"{'# ' + files.name + ': ' if files.name else ''}K\theld-out log-likelihood per sample\tstandard error", file=sys.stderr)
+        row = f"{score.mean:.3f}\t{score.standard_error:.3f}" if score is not None else "-\t(cannot be learned without one demonstration)"
+        print(f"{states}\t{row}", file=sys.stderr, flush=True)
+
+    return print_row
+
+
+def _write_and_show(skill: LearnedSkill, plot: Path | None) -> None:
     """Write a learned skill's model file (and figure), print its states on stdout and what
     was written on stderr; with several skills, under the skill's name."""
     from stl_lfd.hsmm import summary_rows
@@ -96,10 +121,10 @@ def _write_and_show(skill: LearnedSkill, plot: Path | None, states: int) -> None
 
         write_skill_figure(skill, figure)
     _print_summary(summary_rows(skill.shown), skill.model.signal_names_)
-    _report_learned(skill, states)
+    _report_learned(skill)
 
 
-def _report_learned(skill: LearnedSkill, states: int) -> None:
+def _report_learned(skill: LearnedSkill) -> None:
     from stl_lfd.hsmm import TPHSMM
 
     model = skill.model
@@ -111,7 +136,8 @@ def _report_learned(skill: LearnedSkill, states: int) -> None:
             file=sys.stderr,
         )
     count = f"{len(skill.sequences)} demonstration{'s' if len(skill.sequences) != 1 else ''}"
-    print(f"wrote {skill.files.model} ({count}, K = {states}{learned_in}, {len(model.monitor_.history)} EM iterations)", file=sys.stderr)
+    chosen = " (chosen: the smallest within one standard error of the best held-out score)" if skill.states_choice else ""
+    print(f"wrote {skill.files.model} ({count}, K = {model.n_states}{chosen}{learned_in}, {len(model.monitor_.history)} EM iterations)", file=sys.stderr)
 
 
 def _print_summary(rows: list[dict], names: list[str]) -> None:

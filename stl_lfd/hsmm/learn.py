@@ -81,7 +81,7 @@ def learn(
     _check_settings(n_states, sample_period)
     if not demos:
         raise ModelError(f"{source}: no demonstrations to learn from")
-    period = max(median_period(demos), COARSEST_DEFAULT_PERIOD) if sample_period is None else sample_period
+    period = learning_period(demos, sample_period)
     longest = max(demos, key=lambda demo: demo.duration)
     problem = samples_problem(longest.duration, 1.0 / period)
     if problem:
@@ -107,6 +107,12 @@ def learn(
     except ModelError as error:
         raise ModelError(f"{source}: {error}") from None
     return model, sequences
+
+
+def learning_period(demos: list[SignalTable], sample_period: float | None = None) -> float:
+    """The period the demonstrations are learned at: `sample_period`, or by default their median
+    period but not finer than `COARSEST_DEFAULT_PERIOD`."""
+    return max(median_period(demos), COARSEST_DEFAULT_PERIOD) if sample_period is None else sample_period
 
 
 def _check_settings(n_states: int, sample_period: float | None) -> None:

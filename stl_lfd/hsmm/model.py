@@ -131,6 +131,18 @@ class HSMM:
         gamma, _, _ = hmm_posteriors(self.startprob_, self._hmm_transmat(), em.frame_likelihood(self, padded)[0], lengths)
         return np.concatenate([gamma[b, : lengths[b]].argmax(axis=1) for b in range(len(lengths))])
 
+    def score(self, X: np.ndarray, lengths: np.ndarray | None = None) -> float:
+        """Log-likelihood of the samples `X` (`N x D`, in the model's columns) under the model
+        (its HMM equivalent, as `predict`), summed over the sequences of `lengths`."""
+        self._check()
+        X = np.asarray(X, dtype=float)
+        lengths = np.array([len(X)]) if lengths is None else np.asarray(lengths, dtype=int)
+        padded = em.pad_sequences(np.split(X, np.cumsum(lengths)[:-1]))
+        likelihood, log_scale = em.frame_likelihood(self, padded)
+        _, _, log_likelihood = hmm_posteriors(self.startprob_, self._hmm_transmat(), likelihood, lengths)
+        valid = np.arange(padded.shape[1])[None, :] < lengths[:, None]
+        return float(log_likelihood.sum() + log_scale[valid].sum())
+
     # --- generation ------------------------------------------------------------------------
 
     def state_sequence(self, steps: int, dt: float | None = None) -> np.ndarray:

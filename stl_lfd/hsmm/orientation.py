@@ -91,11 +91,11 @@ class Coordinates:
         return np.array(moved)
 
 
-def to_model_columns(X: np.ndarray, names: list[str]) -> tuple[np.ndarray, list[str], np.ndarray | None]:
+def to_model_columns(X: np.ndarray, names: list[str], reference: np.ndarray | None = None) -> tuple[np.ndarray, list[str], np.ndarray | None]:
     """Demonstration samples (`N x D`, columns `names`) in a model's coordinates: the quaternion
     columns `qx, qy, qz, qw` replaced, where they stood, by the rotation vector `rx, ry, rz`
-    relative to the samples' mean orientation, which is returned as the reference (None, and
-    the samples unchanged, without orientation)."""
+    relative to `reference` (default: the samples' mean orientation), which is returned (None,
+    and the samples unchanged, without orientation)."""
     present = [name for name in QUATERNION_COLUMNS if name in names]
     if not present:
         return X, list(names), None
@@ -103,7 +103,8 @@ def to_model_columns(X: np.ndarray, names: list[str]) -> tuple[np.ndarray, list[
         raise ModelError(f"an orientation needs all of qx, qy, qz, qw (the demonstrations have only {', '.join(present)})")
     columns = [names.index(name) for name in QUATERNION_COLUMNS]
     quaternions = rotations.continuous(X[:, columns] / np.linalg.norm(X[:, columns], axis=1, keepdims=True))
-    reference = rotations.weighted_mean(quaternions, start=quaternions[0])
+    if reference is None:
+        reference = rotations.weighted_mean(quaternions, start=quaternions[0])
     kept = [index for index in range(len(names)) if index not in columns]
     at = sum(1 for index in kept if index < columns[0])
     values = np.insert(X[:, kept], [at] * 3, rotations.log_map(reference, quaternions), axis=1)

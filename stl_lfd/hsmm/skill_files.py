@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -16,6 +17,7 @@ from stl_lfd.hsmm.io import save_model
 from stl_lfd.hsmm.learn import demonstrated_skill, learn_from_folder
 from stl_lfd.hsmm.model import HSMM
 from stl_lfd.hsmm.spread import MinimumSpread
+from stl_lfd.hsmm.states_choice import HeldOutScore, StatesChoice, choose_states
 from stl_lfd.spelling import spelled
 
 MODEL_FILE = Path("model.npz")  # where one skill's model goes by default
@@ -49,12 +51,14 @@ class LearnedSkill:
         sequences: the resampled demonstrations (`T_i x D` each, base frame).
         shown: the model as its demonstrations show it (`demonstrated_skill`: a TP-HSMM at the
             first demonstration's frame poses).
+        states_choice: how K was chosen, when a range was given (None: K was given).
     """
 
     files: SkillFiles
     model: HSMM
     sequences: list[np.ndarray]
     shown: HSMM
+    states_choice: StatesChoice | None = None
 
     def save(self) -> None:
         """Write the model file (creating the models folder of several skills)."""
@@ -81,16 +85,25 @@ def skill_files(demos: str | Path, output: str | Path | None = None) -> list[Ski
 
 def learn_skills(
     skills: list[SkillFiles],
-    n_states: int = 6,
+    n_states: int | range = 6,
     sample_period: float | None = None,
     frames: list[str] | None = None,
     restarts: int = 1,
     min_spread: MinimumSpread | None | str = "auto",
+    progress: Callable[[SkillFiles, int, HeldOutScore | None], None] | None = None,
 ) -> list[LearnedSkill]:
     """Learn every skill of `skills` (`learn_from_folder` with these settings), all of them
-    before any is written: a skill that cannot be learned leaves no model file behind."""
+    before any is written: a skill that cannot be learned leaves no model file behind.
+
+    A range of K chooses each skill's own K from it (`choose_states`), calling
+    `progress(files, K, score)` after each K tried.
+    """
     learned = []
     for files in skills:
-        model, sequences = learn_from_folder(files.demos, n_states, sample_period, frames, restarts, min_spread)
-        learned.append(LearnedSkill(files, model, sequences, demonstrated_skill(model, files.demos)))
+        choice = None
+        if isinstance(n_states, range):
+            report = None if progress is None else lambda K, score, files=files: progress(files, K, score)
+            choice = choose_states(files.demos, n_states, sample_period, frames, restarts, min_spread, report)
+        model, sequences = learn_from_folder(files.demos, choice.chosen if choice else n_states, sample_period, frames, restarts, min_spread)
+        learned.append(LearnedSkill(files, model, sequences, demonstrated_skill(model, files.demos), choice))
     return learned

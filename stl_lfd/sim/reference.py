@@ -104,6 +104,15 @@ class Reference:
     def duration(self) -> float:
         return float(self.times[-1] - self.times[0])
 
+    def action_end(self, time: float) -> float:
+        """When the action that starts at `time` is over: the first later sample that belongs to
+        another skill or action (`time` itself for a reference without skill labels)."""
+        if self.skills is None:
+            return time
+        start = int(np.searchsorted(self.times, time - 1e-9))
+        later = np.flatnonzero(self.skills[start:] != self.skills[start])
+        return float(self.times[start + later[0]]) if later.size else float(self.times[-1])
+
     def positions_at(self, times: np.ndarray) -> np.ndarray:
         """`len(times) x 3` positions by linear interpolation (held at the ends)."""
         return np.column_stack([np.interp(times, self.times, self.positions[:, axis]) for axis in range(3)])

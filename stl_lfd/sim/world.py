@@ -11,9 +11,10 @@ and the scene's frames. The wrench is low-pass filtered as a force sensor's elec
 
 A grasp is the fingers closing with the scene's finger force on whatever is between them: the
 object is held by friction alone. The `grasp` event only declares the object as the hand's load
-(as a Franka user sets the load after grasping), so that the wrist sensor's reading has its
-weight removed; it fails the rollout when no movable object is within the scene's grasp
-distance of the hand.
+once the grasp action is over (as a Franka user sets the load after grasping: declared while
+the object still stands on the table, its weight would be read as a force and lifted by the
+arm), so that the wrist sensor's reading has its weight removed; it fails the rollout when no
+movable object is within the scene's grasp distance of the hand.
 """
 
 from __future__ import annotations
@@ -104,10 +105,16 @@ def simulate(world: World, reference: Reference, scene: Scene, rate: float, obse
     if observer is not None:
         observer(0.0, world)
     events = list(reference.events)
+    load: tuple[float, SceneObject] | None = None  # a grasped object and when it becomes the load
     for step in range(1, steps + 1):
         while events and events[0][0] <= step_times[step] + 1e-9:
             time, action = events.pop(0)
-            world.declare_load(graspable(world, scene, time) if action == "grasp" else None)
+            load = (reference.action_end(time), graspable(world, scene, time)) if action == "grasp" else None
+            if load is None:
+                world.declare_load(None)
+        if load is not None and load[0] <= step_times[step] + 1e-9:
+            world.declare_load(load[1])
+            load = None
         world.command(target(step - 1))  # the world is at the previous step's time: its target, its twist
         world.step()
         recorder.record(step, world.hand_pose(), world.gripper_opening(), world.wrench(), world.frame_poses(), world.held_frames())

@@ -7,9 +7,11 @@ set. `PlacedSkill.reference(s)` (skills in a placed scene, as every command and 
 objective execute them) calls these.
 
 A behaviour's reference: each skill retrieved for its expected duration plus its step's
-`settle` seconds, the last position held during actions, the fingers closed from a grasp until
-the next release, everything joined into one reference (padded by holding the last sample, or
-cut, to `duration` when given), so that the recorded signal is continuous.
+`settle` seconds and eased in from where the step before left the hand (`eased_in`: a jump
+where skills join jerks the arm, and the wrist reads a spike), the last position held during
+actions, the fingers closing (at `GRIPPER_SPEED`) from a grasp until the next release,
+everything joined into one reference (padded by holding the last sample, or cut, to
+`duration` when given), so that the recorded signal is continuous.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+import stl_lfd.rotations as rotations
 from stl_lfd.errors import ConfigError, ModelError
 from stl_lfd.hsmm import HSMM, TPHSMM, Trajectory
 from stl_lfd.hsmm.retrieval import retrieve_batch
@@ -28,6 +31,10 @@ from stl_lfd.skill.behaviour import Behaviour, SkillStep
 
 POSITION_SIGNALS = ("x", "y", "z")
 OPEN_WIDTH = 0.08  # m: the fingers' opening where a behaviour has no scene to say it
+# m/s: how fast the commanded opening changes at a grasp or release (the Franka Hand's fastest):
+# fingers told to close at once strike the object, and the wrist reads the blow.
+GRIPPER_SPEED = 0.1
+EASE_SECONDS = 1.0  # s: a skill's start moves to where the step before left the hand over this
 
 
 def build_reference(
@@ -103,6 +110,9 @@ def _joined(behaviour: Behaviour, retrieved: list[Reference | None], start: np.n
     for step, skill in zip(behaviour.steps, retrieved):
         if skill is not None:
             positions, names, followed, turn = skill.positions, skill.skills, skill.states, skill.orientations
+            if pieces:
+                before = turns[-1][-1] if turns[-1] is not None else DOWN
+                positions, turn = eased_in(positions, turn, pieces[-1][-1], before)
         else:
             events.append((clock, step.action))
             closed = step.action == "grasp"
@@ -115,7 +125,8 @@ def _joined(behaviour: Behaviour, retrieved: list[Reference | None], start: np.n
         skills.append(names)
         states.append(followed)
         clock += len(positions) * TIME_STEP
-    positions, gripper, names, followed = np.concatenate(pieces), np.concatenate(grippers), np.concatenate(skills), np.concatenate(states)
+    positions, names, followed = np.concatenate(pieces), np.concatenate(skills), np.concatenate(states)
+    gripper = rate_limited(np.concatenate(grippers), GRIPPER_SPEED * TIME_STEP)
     if duration is not None:
         count = _steps(duration) + 1
         if count > len(positions):  # hold the last sample
@@ -127,6 +138,37 @@ def _joined(behaviour: Behaviour, retrieved: list[Reference | None], start: np.n
     times = np.arange(len(positions)) * TIME_STEP
     kept = tuple((time, action) for time, action in events if time <= times[-1])
     return Reference(times, positions, gripper, kept, names, followed, orientations)
+
+
+def eased_in(positions: np.ndarray, orientations: np.ndarray | None, position: np.ndarray, orientation: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """A skill's `T x 3` positions and `T x 4` orientations (None: straight down) moved to start
+    at `position` (`3`) and `orientation` (`4`), the offset fading out over its first
+    `EASE_SECONDS` along a quintic whose speed and acceleration are zero at both ends, so that
+    the joined reference stays continuous in position, velocity and acceleration; orientations
+    None while both are straight down."""
+    count = min(len(positions), _steps(EASE_SECONDS) + 1)
+    progress = np.linspace(0.0, 1.0, count)
+    fading = np.zeros(len(positions))
+    fading[:count] = 1 - progress**3 * (10 - 15 * progress + 6 * progress**2)
+    moved = positions + fading[:, None] * (np.asarray(position) - positions[0])
+    turns = orientations if orientations is not None else np.tile(DOWN, (len(positions), 1))
+    turn = rotations.to_rotvec(rotations.multiply(orientation, rotations.conjugate(turns[0])))
+    if orientations is None and not np.any(turn):
+        return moved, None
+    return moved, rotations.multiply(rotations.from_rotvec(fading[:, None] * turn), turns)
+
+
+def rate_limited(commands: np.ndarray, step: float) -> np.ndarray:
+    """Piecewise-constant `T` commands followed at most `step` per sample: each change becomes a
+    ramp from where the previous one had got to."""
+    followed = commands.astype(float)
+    changes = np.flatnonzero(commands[1:] != commands[:-1]) + 1
+    for index, change in enumerate(changes):
+        end = changes[index + 1] if index + 1 < len(changes) else len(commands)
+        start, target = followed[change - 1], commands[change]
+        ramp = start + np.sign(target - start) * step * np.arange(1, end - change + 1)
+        followed[change:end] = np.minimum(ramp, target) if target > start else np.maximum(ramp, target)
+    return followed
 
 
 def _joined_orientations(turns: list[np.ndarray | None], pieces: list[np.ndarray], count: int) -> np.ndarray | None:

@@ -6,11 +6,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import stl_lfd.rotations as rotations
 from stl_lfd.errors import ConfigError
 from stl_lfd.optim import load_task
-from stl_lfd.sim import TIME_STEP
+from stl_lfd.sim import TIME_STEP, Reference
 from stl_lfd.skill.behaviour import ActionStep, load_behaviour
-from stl_lfd.skill.reference import build_reference
+from stl_lfd.skill.reference import EASE_SECONDS, GRIPPER_SPEED, build_reference, eased_in, rate_limited
 from tests.conftest import ROOT
 
 BEHAVIOUR = ROOT / "configs" / "behaviours" / "pick_insert.yaml"
@@ -31,13 +32,30 @@ def test_the_reference_joins_skills_and_actions(learned_model):
     assert (grasp, release) == ("grasp", "release")
     first_skill = learned_model.expected_duration() + 1.0
     assert grasp_time == pytest.approx(first_skill, abs=2 * TIME_STEP)
-    closed = (reference.times >= grasp_time) & (reference.times < release_time)
-    assert np.all(reference.gripper[closed] == 0.0) and np.all(reference.gripper[~closed] == 0.08)
+    closing = (reference.times >= grasp_time) & (reference.times < release_time)
+    closed = closing & (reference.times >= grasp_time + 0.08 / GRIPPER_SPEED + TIME_STEP)
+    assert np.all(reference.gripper[closed] == 0.0) and np.all(reference.gripper[reference.times < grasp_time] == 0.08)
+    assert np.all(np.diff(reference.gripper[closing]) <= 0) and np.all(reference.gripper[closing] < 0.08)
+    steps = np.abs(np.diff(reference.gripper))
+    assert steps.max() == pytest.approx(GRIPPER_SPEED * TIME_STEP)  # the fingers close and open at GRIPPER_SPEED
+    assert reference.gripper[-1] == 0.08
     hold = (reference.times >= grasp_time) & (reference.times < grasp_time + 1.0)
     assert np.ptp(reference.positions[hold], axis=0).max() == 0.0  # the hand holds still while grasping
     padded = build_reference(models, behaviour, 0.08, duration=reference.duration + 5)
     assert padded.duration == pytest.approx(reference.duration + 5, abs=TIME_STEP)
     assert np.all(padded.positions[-1] == reference.positions[-1])
+
+
+def test_each_skill_starts_where_the_step_before_left_the_hand(learned_model):
+    # The same model for both skills: the second's first state is far from where the first ends.
+    behaviour = load_behaviour(BEHAVIOUR)
+    models = {"pick": learned_model, "insert": learned_model}
+    reference = build_reference(models, behaviour, open_width=0.08)
+    assert np.linalg.norm(learned_model.means_[0, :3] - reference.positions[reference.skills == "pick"][-1]) > 0.05
+    speeds = np.linalg.norm(np.diff(reference.positions, axis=0), axis=1) / TIME_STEP
+    assert speeds.max() < 1.0  # m/s: no jump anywhere (a jump of 5 cm would be 12 m/s), joins included
+    accelerations = np.linalg.norm(np.diff(reference.positions, 2, axis=0), axis=1) / TIME_STEP**2
+    assert accelerations.max() < 5.0  # m/s^2: each skill starts at rest
 
 
 def write(tmp_path: Path, text: str) -> Path:
@@ -137,3 +155,31 @@ def test_a_batch_of_behaviour_references_is_each_reference_alone(pick_insert_mod
         for name in ("times", "positions", "gripper", "skills", "states"):
             assert np.array_equal(getattr(reference, name), getattr(alone, name)), name
         assert (reference.orientations is None and alone.orientations is None) or np.array_equal(reference.orientations, alone.orientations)
+
+
+def test_eased_in_starts_where_asked_and_ends_as_retrieved():
+    times = np.arange(0, 3, TIME_STEP)
+    positions = np.column_stack([0.1 * times, np.zeros_like(times), np.full_like(times, 0.3)])
+    turned = rotations.multiply(rotations.from_rotvec(np.array([0.0, 0.0, 0.2])), rotations.DOWN)
+    moved, orientations = eased_in(positions, None, np.array([0.0, 0.02, 0.3]), turned)
+    assert np.allclose(moved[0], [0.0, 0.02, 0.3]) and np.allclose(orientations[0], turned)
+    later = times > EASE_SECONDS
+    assert np.allclose(moved[later], positions[later]) and np.allclose(orientations[later], rotations.DOWN)
+    assert np.allclose(moved[1] - moved[0], positions[1] - positions[0], atol=1e-7)  # it leaves at the skill's own speed
+    same, none = eased_in(positions, None, positions[0], rotations.DOWN)
+    assert none is None and np.array_equal(same, positions)
+
+
+def test_rate_limited_commands_ramp_from_where_they_got_to():
+    commands = np.array([0.08] * 3 + [0.0] * 3 + [0.08] * 4)
+    assert np.allclose(rate_limited(commands, 0.03), [0.08, 0.08, 0.08, 0.05, 0.02, 0.0, 0.03, 0.06, 0.08, 0.08])
+    short = np.array([0.08, 0.0, 0.08, 0.08])
+    assert np.allclose(rate_limited(short, 0.03), [0.08, 0.05, 0.08, 0.08])  # opened again before it had closed
+
+
+def test_an_action_ends_where_the_next_skill_starts():
+    times = np.arange(6) * 0.5
+    skills = np.array(["pick", "pick", "grasp", "grasp", "carry", "carry"])
+    reference = Reference(times, np.zeros((6, 3)), events=((1.0, "grasp"),), skills=skills)
+    assert reference.action_end(1.0) == 2.0
+    assert Reference(times, np.zeros((6, 3)), events=((1.0, "grasp"),)).action_end(1.0) == 1.0
