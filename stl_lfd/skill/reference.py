@@ -10,6 +10,7 @@ A behaviour's reference: each skill retrieved for its expected duration plus its
 `settle` seconds and eased in from where the step before left the hand (`eased_in`: a jump
 where skills join jerks the arm, and the wrist reads a spike), the last position held during
 actions, the fingers closing (at `GRIPPER_SPEED`) from a grasp until the next release,
+which opens them,
 everything joined into one reference (padded by holding the last sample, or cut, to
 `duration` when given), so that the recorded signal is continuous.
 """
@@ -31,8 +32,9 @@ from stl_lfd.skill.behaviour import Behaviour, SkillStep
 
 POSITION_SIGNALS = ("x", "y", "z")
 OPEN_WIDTH = 0.08  # m: the fingers' opening where a behaviour has no scene to say it
-# m/s: how fast the commanded opening changes at a grasp or release (the Franka Hand's fastest):
-# fingers told to close at once strike the object, and the wrist reads the blow.
+# m/s: how fast the commanded opening closes at a grasp (the Franka Hand's fastest): fingers told
+# to close at once strike the object, and the wrist reads the blow. A release opens at once: the
+# fingers stand on the object, a fraction of a millimetre from letting it go.
 GRIPPER_SPEED = 0.1
 EASE_SECONDS = 1.0  # s: a skill's start moves to where the step before left the hand over this
 
@@ -126,7 +128,7 @@ def _joined(behaviour: Behaviour, retrieved: list[Reference | None], start: np.n
         states.append(followed)
         clock += len(positions) * TIME_STEP
     positions, names, followed = np.concatenate(pieces), np.concatenate(skills), np.concatenate(states)
-    gripper = rate_limited(np.concatenate(grippers), GRIPPER_SPEED * TIME_STEP)
+    gripper = closing_ramps(np.concatenate(grippers), GRIPPER_SPEED * TIME_STEP)
     if duration is not None:
         count = _steps(duration) + 1
         if count > len(positions):  # hold the last sample
@@ -158,16 +160,15 @@ def eased_in(positions: np.ndarray, orientations: np.ndarray | None, position: n
     return moved, rotations.multiply(rotations.from_rotvec(fading[:, None] * turn), turns)
 
 
-def rate_limited(commands: np.ndarray, step: float) -> np.ndarray:
-    """Piecewise-constant `T` commands followed at most `step` per sample: each change becomes a
-    ramp from where the previous one had got to."""
-    followed = commands.astype(float)
-    changes = np.flatnonzero(commands[1:] != commands[:-1]) + 1
+def closing_ramps(openings: np.ndarray, step: float) -> np.ndarray:
+    """Piecewise-constant `T` openings, each closing followed at most `step` per sample (a ramp
+    from where the opening had got to); an opening follows at once."""
+    followed = openings.astype(float)
+    changes = np.flatnonzero(openings[1:] < openings[:-1]) + 1
     for index, change in enumerate(changes):
-        end = changes[index + 1] if index + 1 < len(changes) else len(commands)
-        start, target = followed[change - 1], commands[change]
-        ramp = start + np.sign(target - start) * step * np.arange(1, end - change + 1)
-        followed[change:end] = np.minimum(ramp, target) if target > start else np.maximum(ramp, target)
+        end = changes[index + 1] if index + 1 < len(changes) else len(openings)
+        ramp = np.maximum(followed[change - 1] - step * np.arange(1, end - change + 1), openings[change])
+        followed[change:end] = np.maximum(ramp, openings[change:end])  # an opening on the way ends the ramp
     return followed
 
 

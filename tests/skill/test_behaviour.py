@@ -11,7 +11,7 @@ from stl_lfd.errors import ConfigError
 from stl_lfd.optim import load_task
 from stl_lfd.sim import TIME_STEP, Reference
 from stl_lfd.skill.behaviour import ActionStep, load_behaviour
-from stl_lfd.skill.reference import EASE_SECONDS, GRIPPER_SPEED, build_reference, eased_in, rate_limited
+from stl_lfd.skill.reference import EASE_SECONDS, GRIPPER_SPEED, build_reference, closing_ramps, eased_in
 from tests.conftest import ROOT
 
 BEHAVIOUR = ROOT / "configs" / "behaviours" / "pick_insert.yaml"
@@ -36,9 +36,8 @@ def test_the_reference_joins_skills_and_actions(learned_model):
     closed = closing & (reference.times >= grasp_time + 0.08 / GRIPPER_SPEED + TIME_STEP)
     assert np.all(reference.gripper[closed] == 0.0) and np.all(reference.gripper[reference.times < grasp_time] == 0.08)
     assert np.all(np.diff(reference.gripper[closing]) <= 0) and np.all(reference.gripper[closing] < 0.08)
-    steps = np.abs(np.diff(reference.gripper))
-    assert steps.max() == pytest.approx(GRIPPER_SPEED * TIME_STEP)  # the fingers close and open at GRIPPER_SPEED
-    assert reference.gripper[-1] == 0.08
+    assert -np.diff(reference.gripper).min() == pytest.approx(GRIPPER_SPEED * TIME_STEP)  # the fingers close at GRIPPER_SPEED
+    assert np.all(reference.gripper[reference.times >= release_time] == 0.08)  # and open at once
     hold = (reference.times >= grasp_time) & (reference.times < grasp_time + 1.0)
     assert np.ptp(reference.positions[hold], axis=0).max() == 0.0  # the hand holds still while grasping
     padded = build_reference(models, behaviour, 0.08, duration=reference.duration + 5)
@@ -170,11 +169,11 @@ def test_eased_in_starts_where_asked_and_ends_as_retrieved():
     assert none is None and np.array_equal(same, positions)
 
 
-def test_rate_limited_commands_ramp_from_where_they_got_to():
-    commands = np.array([0.08] * 3 + [0.0] * 3 + [0.08] * 4)
-    assert np.allclose(rate_limited(commands, 0.03), [0.08, 0.08, 0.08, 0.05, 0.02, 0.0, 0.03, 0.06, 0.08, 0.08])
+def test_closings_ramp_and_openings_follow_at_once():
+    openings = np.array([0.08] * 3 + [0.0] * 3 + [0.08] * 2 + [0.04] * 2)
+    assert np.allclose(closing_ramps(openings, 0.03), [0.08, 0.08, 0.08, 0.05, 0.02, 0.0, 0.08, 0.08, 0.05, 0.04])
     short = np.array([0.08, 0.0, 0.08, 0.08])
-    assert np.allclose(rate_limited(short, 0.03), [0.08, 0.05, 0.08, 0.08])  # opened again before it had closed
+    assert np.allclose(closing_ramps(short, 0.03), [0.08, 0.05, 0.08, 0.08])  # opened again before it had closed
 
 
 def test_an_action_ends_where_the_next_skill_starts():
