@@ -8,7 +8,8 @@ recording times, to `signal_columns`. Either way the columns are built here and 
     t, x, y, z, gripper, force, qx, qy, qz, qw, tilt, fx, fy, fz, tx, ty, tz,
     then NAME_x, NAME_y, NAME_z of each scene frame, then each frame's NAME_tilt,
     then NAME_speed, NAME_held of each frame that moves with an object,
-    then NAME_depth, NAME_offset of each frame that goes into a hole.
+    then NAME_depth, NAME_offset of each frame that goes into a hole, ...,
+    then NAME_clearance of each object declared with one (`stl_lfd.sim.clearance`).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from stl_lfd.choices import WRENCH_SIGNALS
 from stl_lfd.errors import ExecutionError
 from stl_lfd.rotations import QUATERNION_COLUMNS
 from stl_lfd.signals import SignalTable
+from stl_lfd.sim.clearance import Poses, clearance_columns
 from stl_lfd.sim.reference import Reference, Rollout, recording_times
 from stl_lfd.sim.scene import Scene, SceneFrame, lowest_heights
 
@@ -84,6 +86,12 @@ def signal_columns(steps: Steps, scene: Scene, times: np.ndarray) -> dict[str, n
             turns = at(rotations.continuous(steps.frame_orientations[:, index]))
             columns.update(zip(frame.orientation_signals, (turns / np.linalg.norm(turns, axis=1, keepdims=True)).T))
     columns.update({name: at(values) for name, values in outcome_columns(steps, scene).items()})
+    if any(item.clearance for item in scene.objects):  # distances cost: taken at the recording times only
+        held = at(steps.frame_held.astype(float)) if steps.frame_held.size else steps.frame_held
+        frames = np.stack([at(steps.frame_positions[:, index]) for index in range(len(scene.frames))], axis=1) if scene.frames else steps.frame_positions
+        turns = [at(rotations.continuous(steps.frame_orientations[:, index])) for index in range(len(scene.frames))]
+        turns_array = np.stack([turn / np.linalg.norm(turn, axis=1, keepdims=True) for turn in turns], axis=1) if turns else steps.frame_orientations
+        columns.update(clearance_columns(Poses(positions, orientations, columns["gripper"], frames, turns_array, np.asarray(held) > 0.5), scene))
     return {name: columns[name] for name in scene.recorded_signals}  # in the order the scene lists them
 
 

@@ -80,6 +80,7 @@ class SceneObject:
     for a sphere. A mass of 0 makes the object fixed to the world. `friction` is the sliding
     friction coefficient; `rolling_friction` (m) the rolling resistance, the lever arm of the
     torque that opposes rolling (a dropped shaft comes to rest instead of rolling on forever).
+    `clearance` records the object's distance to the hand (`clearance_signal`).
     """
 
     name: str
@@ -91,6 +92,13 @@ class SceneObject:
     color: tuple[float, float, float, float] = (0.6, 0.6, 0.6, 1.0)
     friction: float = 1.0
     rolling_friction: float = ROLLING_FRICTION
+    clearance: bool = False
+
+    @property
+    def clearance_signal(self) -> str:
+        """For an object declared with `clearance`: its signed distance (m) to the hand, the
+        fingers and what they hold (`stl_lfd.sim.clearance`)."""
+        return f"{self.name}_clearance"
 
     def distance(self, point: np.ndarray, position=None, orientation=None) -> float:
         """Distance (m) from a base-frame `point` to the object's surface (0 inside), the object
@@ -265,8 +273,8 @@ class Scene:
         """What a rollout in this scene records: `RECORDED_SIGNALS`, each frame's position, each
         frame's tilt, then the speed and held flag of each frame that moves with a movable object
         (`moving_frames`), the depth and offset of each frame that goes into a hole, the height
-        and offsets of each frame put onto a target, and last the orientation of each frame that
-        moves with a movable object."""
+        and offsets of each frame put onto a target, the orientation of each frame that moves
+        with a movable object, and last the clearance of each object declared with one."""
         return (
             RECORDED_SIGNALS
             + tuple(signal for frame in self.frames for signal in frame.signals)
@@ -275,6 +283,7 @@ class Scene:
             + tuple(signal for frame in self.frames if frame.into for signal in frame.hole_signals)
             + tuple(signal for frame in self.frames if frame.onto for signal in frame.target_signals)
             + tuple(signal for frame in self.moving_frames for signal in frame.orientation_signals)
+            + tuple(item.clearance_signal for item in self.objects if item.clearance)
         )
 
     def carried_object(self, frame: SceneFrame) -> SceneObject | None:

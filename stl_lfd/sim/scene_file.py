@@ -129,6 +129,7 @@ def parse_scene(data: dict[str, Any], path: Path) -> Scene:
         raise ConfigError(f"{path}: 'frames' must map each frame's name to its pose and objects")
     scene = replace(scene, frames=tuple(_parse_frame(name, item, path, scene) for name, item in frames.items()))
     _check_holes(scene, path)
+    _check_clearances(scene, path)
     return scene
 
 
@@ -167,6 +168,17 @@ def _check_targets(scene: Scene, path: Path) -> None:
         if objects[frame.objects[0]].mass <= 0:
             raise ConfigError(
                 f"{path}: 'frames.{frame.name}.onto': the frame's first object, {frame.objects[0]}, must be movable (a mass above 0): it is what is put on the target"
+            )
+
+
+def _check_clearances(scene: Scene, path: Path) -> None:
+    """ConfigError for a `clearance` on a movable object that no frame moves with (its pose is
+    recorded only as a frame's first movable object)."""
+    carried = {item.name for frame in scene.frames if (item := scene.carried_object(frame)) is not None}
+    for index, item in enumerate(scene.objects):
+        if item.clearance and item.mass > 0 and item.name not in carried:
+            raise ConfigError(
+                f"{path}: 'objects[{index}].clearance': {item.name} is movable, and its pose is recorded only when a frame moves with it: list it first in a frame's 'objects'"
             )
 
 
@@ -292,7 +304,7 @@ def _parse_safety(data: Any, path: Path) -> Safety:
 
 def _parse_object(data: Any, path: Path, index: int) -> SceneObject:
     where = f"objects[{index}]"
-    keys = ("name", "shape", "size", "position", "orientation", "mass", "color", "friction", "rolling_friction")
+    keys = ("name", "shape", "size", "position", "orientation", "mass", "color", "friction", "rolling_friction", "clearance")
     check_keys(data, keys, path, where, required=("name", "shape", "size", "position"))
     shape = data["shape"]
     if shape not in SHAPES:
@@ -315,4 +327,8 @@ def _parse_object(data: Any, path: Path, index: int) -> SceneObject:
     for key in ("friction", "rolling_friction"):
         if key in data:
             values[key] = number(data[key], path, f"{where}.{key}", minimum=0.0)
+    if "clearance" in data:
+        if not isinstance(data["clearance"], bool):
+            raise ConfigError(f"{path}: '{where}.clearance' must be true or false (got {shown(data['clearance'])})")
+        values["clearance"] = data["clearance"]
     return SceneObject(**values)
