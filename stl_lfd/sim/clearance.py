@@ -1,5 +1,7 @@
-"""Clearances: how far the hand, its fingers and what they hold stay from a scene object, as the
-signal `NAME_clearance` of each object declared with `clearance: true`.
+"""Clearances: how far the hand, its fingers and what they hold stay from a scene object (the
+signal `NAME_clearance` of an object declared with `clearance: true` or `[hand, ...]`), and how
+far two objects are from each other (`NAME_clearance_OTHER`, `clearance: [OTHER]`: 0 or less
+while they touch).
 
 The hand is three boxes, in the frame of the grasp target (the recorded `x, y, z` and
 orientation; z points from the palm to the fingertips, the fingers close along y): the bounding
@@ -18,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 import stl_lfd.rotations as rotations
+from stl_lfd.sim.scene import HAND
 
 if TYPE_CHECKING:
     from stl_lfd.sim.scene import Scene, SceneFrame, SceneObject
@@ -69,25 +72,33 @@ def clearance_columns(steps: Poses, scene: Scene) -> dict[str, np.ndarray]:
     its fingers and what they hold (`NAME_clearance`)."""
     import fcl  # only scenes that declare clearances pay for it
 
-    watched = [item for item in scene.objects if item.clearance]
-    if not watched:
-        return {}
-    held_frames = [(index, frame) for index, frame in enumerate(scene.frames) if scene.carried_object(frame) is not None]
     request = fcl.DistanceRequest(enable_signed_distance=True)
+    objects = {item.name: item for item in scene.objects}
     columns = {}
-    for item in watched:
-        target = _collision_object(fcl, item)
-        values = np.empty(len(steps.positions))
-        for step in range(len(steps.positions)):
-            _place(fcl, target, *_object_pose(steps, scene, item, step))
-            parts = _hand_objects(fcl, steps, step) + [
-                _placed_object(fcl, scene.carried_object(frame), *_frame_object_pose(steps, scene, frame, index, step))
-                for index, frame in held_frames
-                if steps.frame_held[step, index] > 0.5 and scene.carried_object(frame).name != item.name
-            ]
-            values[step] = min(fcl.distance(part, target, request, fcl.DistanceResult()) for part in parts)
-        columns[f"{item.name}_clearance"] = values
+    for item in scene.objects:
+        for other, signal in zip(item.clearance, item.clearance_signals):
+            target = _collision_object(fcl, item)
+            values = np.empty(len(steps.positions))
+            for step in range(len(steps.positions)):
+                _place(fcl, target, *_object_pose(steps, scene, item, step))
+                parts = (
+                    _hand_parts(fcl, steps, scene, step, item.name)
+                    if other == HAND
+                    else [_placed_object(fcl, objects[other], *_object_pose(steps, scene, objects[other], step))]
+                )
+                values[step] = min(fcl.distance(part, target, request, fcl.DistanceResult()) for part in parts)
+            columns[signal] = values
     return columns
+
+
+def _hand_parts(fcl, steps: Poses, scene: Scene, step: int, measured: str) -> list:
+    """The hand's boxes at `step`, and each object the fingers hold but `measured`."""
+    held = [
+        _placed_object(fcl, item, *_frame_object_pose(steps, scene, frame, index, step))
+        for index, frame in enumerate(scene.frames)
+        if (item := scene.carried_object(frame)) is not None and steps.frame_held[step, index] and item.name != measured
+    ]
+    return _hand_objects(fcl, steps, step) + held
 
 
 def _hand_objects(fcl, steps: Poses, step: int) -> list:

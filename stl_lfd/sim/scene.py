@@ -23,6 +23,7 @@ from stl_lfd.spelling import spelled
 SHAPES = ("box", "cylinder", "sphere")
 # m: rolling resistance of an object by default, about that of a metal shaft on a wooden table
 ROLLING_FRICTION = 0.001
+HAND = "hand"  # what `SceneObject.clearance` calls the hand, its fingers and what they hold
 REGION_COLORS = ((0.2, 0.5, 0.9, 0.3), (0.9, 0.5, 0.2, 0.3), (0.3, 0.8, 0.3, 0.3), (0.8, 0.3, 0.7, 0.3))
 
 
@@ -80,7 +81,8 @@ class SceneObject:
     for a sphere. A mass of 0 makes the object fixed to the world. `friction` is the sliding
     friction coefficient; `rolling_friction` (m) the rolling resistance, the lever arm of the
     torque that opposes rolling (a dropped shaft comes to rest instead of rolling on forever).
-    `clearance` records the object's distance to the hand (`clearance_signal`).
+    `clearance` names what the object's distance is recorded to (`HAND`, other objects):
+    `clearance_signals`.
     """
 
     name: str
@@ -92,13 +94,14 @@ class SceneObject:
     color: tuple[float, float, float, float] = (0.6, 0.6, 0.6, 1.0)
     friction: float = 1.0
     rolling_friction: float = ROLLING_FRICTION
-    clearance: bool = False
+    clearance: tuple[str, ...] = ()
 
     @property
-    def clearance_signal(self) -> str:
-        """For an object declared with `clearance`: its signed distance (m) to the hand, the
-        fingers and what they hold (`stl_lfd.sim.clearance`)."""
-        return f"{self.name}_clearance"
+    def clearance_signals(self) -> tuple[str, ...]:
+        """The signed distance (m) of the object to each of its `clearance`: `NAME_clearance` to
+        the hand, the fingers and what they hold, `NAME_clearance_OTHER` to another object
+        (`stl_lfd.sim.clearance`)."""
+        return tuple(f"{self.name}_clearance" if other == HAND else f"{self.name}_clearance_{other}" for other in self.clearance)
 
     def distance(self, point: np.ndarray, position=None, orientation=None) -> float:
         """Distance (m) from a base-frame `point` to the object's surface (0 inside), the object
@@ -283,7 +286,7 @@ class Scene:
             + tuple(signal for frame in self.frames if frame.into for signal in frame.hole_signals)
             + tuple(signal for frame in self.frames if frame.onto for signal in frame.target_signals)
             + tuple(signal for frame in self.moving_frames for signal in frame.orientation_signals)
-            + tuple(item.clearance_signal for item in self.objects if item.clearance)
+            + tuple(signal for item in self.objects for signal in item.clearance_signals)
         )
 
     def carried_object(self, frame: SceneFrame) -> SceneObject | None:

@@ -19,7 +19,7 @@ from stl_lfd.limits import MAX_SYMMETRY, MAX_YAW
 from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment, parse_pose, pose_from_values
 from stl_lfd.sim.impedance import NULLSPACE_POSTURES, PANDA_TORQUE_LIMITS
 from stl_lfd.sim.safety import Safety
-from stl_lfd.sim.scene import SHAPES, Camera, Control, Scene, SceneFrame, SceneObject, check_area, lowest_heights
+from stl_lfd.sim.scene import HAND, SHAPES, Camera, Control, Scene, SceneFrame, SceneObject, check_area, lowest_heights
 from stl_lfd.spelling import spelled
 from stl_lfd.yamlfile import check_keys, number, read_yaml, shown, vector
 
@@ -172,14 +172,22 @@ def _check_targets(scene: Scene, path: Path) -> None:
 
 
 def _check_clearances(scene: Scene, path: Path) -> None:
-    """ConfigError for a `clearance` on a movable object that no frame moves with (its pose is
-    recorded only as a frame's first movable object)."""
+    """ConfigError for a `clearance` that names an unknown object or the object itself, or that
+    involves a movable object no frame moves with (its pose is recorded only as a frame's first
+    movable object)."""
     carried = {item.name for frame in scene.frames if (item := scene.carried_object(frame)) is not None}
+    objects = {item.name: item for item in scene.objects}
     for index, item in enumerate(scene.objects):
-        if item.clearance and item.mass > 0 and item.name not in carried:
-            raise ConfigError(
-                f"{path}: 'objects[{index}].clearance': {item.name} is movable, and its pose is recorded only when a frame moves with it: list it first in a frame's 'objects'"
-            )
+        where = f"objects[{index}].clearance"
+        unknown = [other for other in item.clearance if other != HAND and (other not in objects or other == item.name)]
+        if unknown:
+            raise ConfigError(f"{path}: '{where}' names {shown(unknown[0])}: it must be hand or another object ({', '.join(objects)})")
+        for other in item.clearance:
+            for name in (item.name, other):
+                if name != HAND and objects[name].mass > 0 and name not in carried:
+                    raise ConfigError(
+                        f"{path}: '{where}': {name} is movable, and its pose is recorded only when a frame moves with it: list it first in a frame's 'objects'"
+                    )
 
 
 def _check_rim(frame: SceneFrame, walls: list[SceneObject], path: Path) -> None:
@@ -328,7 +336,14 @@ def _parse_object(data: Any, path: Path, index: int) -> SceneObject:
         if key in data:
             values[key] = number(data[key], path, f"{where}.{key}", minimum=0.0)
     if "clearance" in data:
-        if not isinstance(data["clearance"], bool):
-            raise ConfigError(f"{path}: '{where}.clearance' must be true or false (got {shown(data['clearance'])})")
-        values["clearance"] = data["clearance"]
+        values["clearance"] = _clearance(data["clearance"], path, where)
     return SceneObject(**values)
+
+
+def _clearance(value: Any, path: Path, where: str) -> tuple[str, ...]:
+    """An object's `clearance`: true (the hand), false, or a list of `hand` and object names."""
+    if isinstance(value, bool):
+        return (HAND,) if value else ()
+    if not isinstance(value, list) or not value or not all(isinstance(name, str) for name in value) or len(set(value)) != len(value):
+        raise ConfigError(f"{path}: '{where}.clearance' must be true, false or a list of distinct names: hand and other objects (got {shown(value)})")
+    return tuple(value)

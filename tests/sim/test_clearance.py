@@ -1,6 +1,7 @@
 """Clearances (`NAME_clearance`): the signed distance from the hand, its fingers and what they
 hold to an object, exact for boxes, cylinders and spheres at any pose."""
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -28,14 +29,14 @@ def scene_with(*objects, frames=()):
 
 
 def test_fingertips_above_a_box_are_their_height_above_its_top():
-    table = SceneObject("table", "box", (0.2, 0.2, 0.01), (0.5, 0.0, 0.01), clearance=True)
+    table = SceneObject("table", "box", (0.2, 0.2, 0.01), (0.5, 0.0, 0.01), clearance=("hand",))
     heights = np.array([0.10, 0.05, 0.03])
     steps = steps_at([[0.5, 0.0, 0.02 + height] for height in heights])
     assert clearance_columns(steps, scene_with(table))["table_clearance"] == pytest.approx(heights - FINGERTIP, abs=1e-6)
 
 
 def test_a_finger_beside_a_post_and_inside_it():
-    post = SceneObject("post", "cylinder", (0.01, 0.08), (0.5, 0.1, 0.04), clearance=True)  # its top 24 mm below the palm
+    post = SceneObject("post", "cylinder", (0.01, 0.08), (0.5, 0.1, 0.04), clearance=("hand",))  # its top 24 mm below the palm
     opening = 0.06
     # the left finger's outer face is at y = opening / 2 + 2 * FINGER_HALF[1] beside the grasp target
     outer = opening / 2 + 2 * FINGER_HALF[1]
@@ -47,14 +48,14 @@ def test_a_finger_beside_a_post_and_inside_it():
 
 def test_a_tilted_box_is_measured_exactly():
     turn = (0.0, 0.0, np.pi / 4)
-    block = SceneObject("block", "box", (0.02, 0.02, 0.02), (0.5, 0.0, 0.02), turn, clearance=True)
+    block = SceneObject("block", "box", (0.02, 0.02, 0.02), (0.5, 0.0, 0.02), turn, clearance=("hand",))
     # straight above the block's top: the fingertips 3 cm above it, whatever its yaw
     steps = steps_at([[0.5, 0.0, 0.04 + 0.03 + FINGERTIP]], opening=0.0)
     assert clearance_columns(steps, scene_with(block))["block_clearance"][0] == pytest.approx(0.03, abs=1e-6)
 
 
 def test_what_the_fingers_hold_counts_as_the_hand():
-    wall = SceneObject("wall", "box", (0.01, 0.2, 0.1), (0.65, 0.0, 0.1), clearance=True)  # its face at x = 0.64
+    wall = SceneObject("wall", "box", (0.01, 0.2, 0.1), (0.65, 0.0, 0.1), clearance=("hand",))  # its face at x = 0.64
     peg = SceneObject("peg", "cylinder", (0.01, 0.2), (0.5, 0.0, 0.1), mass=0.05)
     frame = SceneFrame("peg", Pose((0.5, 0.0, 0.1), 0.0), ("peg",))
     lying = rotations.from_euler(0.0, np.pi / 2, 0.0)  # along x: its far end at x = 0.6
@@ -62,6 +63,9 @@ def test_what_the_fingers_hold_counts_as_the_hand():
     steps = steps_at([[0.5, 0.0, 0.1]] * 2, opening=0.02, frames=frames)
     clearance = clearance_columns(steps, scene_with(wall, peg, frames=[frame]))["wall_clearance"]
     assert clearance == pytest.approx([0.64 - (0.5 + 0.0316), 0.64 - 0.6], abs=1e-6)  # the palm's side, then the peg's end
+    between = replace(peg, clearance=("wall",))
+    columns = clearance_columns(steps, scene_with(wall, between, frames=[frame]))
+    assert columns["peg_clearance_wall"] == pytest.approx([0.04, 0.04], abs=1e-6)  # the objects' own distance, held or not
 
 
 def test_a_scene_file_declares_clearances(tmp_path: Path):
@@ -76,7 +80,10 @@ def test_a_scene_file_declares_clearances(tmp_path: Path):
     scene = load_scene(path)
     assert scene.recorded_signals[-1] == "post_clearance"
     path.write_text(text % "maybe")
-    with pytest.raises(ConfigError, match=r"'objects\[1\].clearance' must be true or false"):
+    with pytest.raises(ConfigError, match=r"'objects\[1\].clearance' must be true, false or a list"):
+        load_scene(path)
+    path.write_text(text % "[post, pillar]")
+    with pytest.raises(ConfigError, match=r"'objects\[1\].clearance' names 'pillar': it must be hand or another object"):
         load_scene(path)
     path.write_text(text % "true")
     with pytest.raises(ConfigError, match=r"box is movable.*list it first in a frame"):
