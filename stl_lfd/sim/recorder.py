@@ -8,7 +8,8 @@ recording times, to `signal_columns`. Either way the columns are built here and 
     t, x, y, z, gripper, force, qx, qy, qz, qw, tilt, fx, fy, fz, tx, ty, tz,
     then NAME_x, NAME_y, NAME_z of each scene frame, then each frame's NAME_tilt,
     then NAME_speed, NAME_held of each frame that moves with an object,
-    then NAME_depth, NAME_offset of each frame that goes into a hole, ...,
+    then NAME_depth, NAME_offset of each frame that goes into a hole, ..., NAME_inside of each
+    frame put inside a container,
     then NAME_clearance of each object declared with one (`stl_lfd.sim.clearance`).
 """
 
@@ -25,7 +26,7 @@ from stl_lfd.rotations import QUATERNION_COLUMNS
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.clearance import Poses, clearance_columns
 from stl_lfd.sim.reference import Reference, Rollout, recording_times
-from stl_lfd.sim.scene import Scene, SceneFrame, lowest_heights
+from stl_lfd.sim.scene import Scene, SceneFrame, extents_along, lowest_heights
 
 
 @dataclass
@@ -120,7 +121,25 @@ def outcome_columns(steps: Steps, scene: Scene) -> dict[str, np.ndarray]:
     for frame in scene.frames:
         if frame.onto is not None:
             columns.update(target_columns(steps, scene, frame, index))
+        if frame.inside is not None:
+            columns[frame.inside_signal] = inside_column(steps, scene, frame, index)
     return columns
+
+
+def inside_column(steps: Steps, scene: Scene, frame: SceneFrame, index: dict[str, int]) -> np.ndarray:
+    """At `steps.times`: how far a frame's whole object is inside its container's interior box
+    (`SceneFrame.inside_signal`): the least margin between the object's extent and the box's six
+    faces, along the container's first object's axes as it stands."""
+    item = scene.carried_object(frame)
+    orientations = steps.frame_orientations[:, index[frame.name]]
+    centres = steps.frame_positions[:, index[frame.name]] - rotations.rotate(orientations, np.tile(scene.origin_in_object(frame), (len(steps.times), 1)))
+    container = scene.frames[index[frame.inside]]
+    origins, turns = steps.frame_positions[:, index[container.name]], steps.frame_orientations[:, index[container.name]]
+    axes = rotations.to_matrix(turns).swapaxes(-1, -2)  # S x 3 x 3: the container's axes (rows), base frame
+    local = rotations.rotate(rotations.conjugate(turns), centres - origins)  # the object's centre in the container's frame
+    reach = extents_along(item.shape, item.size, orientations, axes)
+    lower, upper = (np.asarray(corner, dtype=float) for corner in container.interior)
+    return np.minimum(upper - (local + reach), (local - reach) - lower).min(axis=1)
 
 
 def target_columns(steps: Steps, scene: Scene, frame: SceneFrame, index: dict[str, int]) -> dict[str, np.ndarray]:

@@ -137,6 +137,19 @@ def lowest_heights(shape: str, size: tuple[float, ...], centres: np.ndarray, ori
     return centres[:, 2] - height / 2 * vertical - radius * np.sqrt(1.0 - vertical**2)
 
 
+def extents_along(shape: str, size: tuple[float, ...], orientations: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """`S x A` half extents of a box, cylinder or sphere (`size` as `SceneObject`'s) turned by
+    `orientations` (`S x 4`) along each of `S x A x 3` unit `axes`: how far the shape reaches
+    from its centre in that direction (its support function)."""
+    if shape == "sphere":
+        return np.full(axes.shape[:2], size[0])
+    local = np.einsum("sji,saj->sai", rotations.to_matrix(orientations), axes)  # the axes in the object's frame
+    if shape == "box":
+        return np.abs(local) @ np.asarray(size, dtype=float)
+    along = np.clip(np.abs(local[..., 2]), 0.0, 1.0)  # a cylinder's axis is its z
+    return size[1] / 2 * along + size[0] * np.sqrt(1.0 - along**2)
+
+
 @dataclass(frozen=True)
 class SceneFrame:
     """A named object pose that skills refer to (a TP-HSMM frame) and that can be placed.
@@ -160,6 +173,11 @@ class SceneFrame:
         onto: the frame whose origin is the target point this frame's movable object is put on
             (a spot on a shelf's top, the centre of a block's top face); rollouts then record
             `NAME_height`, `NAME_dx`, `NAME_dy` and `NAME_offset` (None: no such target).
+        interior: `(lower, upper)` corners of a box relative to the frame's origin, along its
+            first object's axes: the space inside a container (a tray between its walls, a
+            drawer), or None.
+        inside: the frame (one with an `interior`) this frame's movable object is put inside;
+            rollouts then record `NAME_inside` (None: none).
     """
 
     name: str
@@ -171,6 +189,8 @@ class SceneFrame:
     rim: float | None = None
     into: str | None = None
     onto: str | None = None
+    interior: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
+    inside: str | None = None
 
     def equivalent(self, pose: Pose) -> Pose:
         """`pose` with its yaw turned by a multiple of the symmetry's angle to lie within half of
@@ -217,6 +237,13 @@ class SceneFrame:
         offset from the origin along the x and y axes of the target's first object (m), and
         their distance."""
         return (f"{self.name}_height", f"{self.name}_dx", f"{self.name}_dy", f"{self.name}_offset")
+
+    @property
+    def inside_signal(self) -> str:
+        """For a frame put `inside` another's interior: how far its whole object is inside that
+        box (m: the least distance from the object to the box's faces; negative by how far it
+        sticks out)."""
+        return f"{self.name}_inside"
 
 
 @dataclass(frozen=True)
@@ -277,7 +304,8 @@ class Scene:
         frame's tilt, then the speed and held flag of each frame that moves with a movable object
         (`moving_frames`), the depth and offset of each frame that goes into a hole, the height
         and offsets of each frame put onto a target, the orientation of each frame that moves
-        with a movable object, and last the clearance of each object declared with one."""
+        with a movable object, how far inside its container each frame put `inside` one is, and
+        last the clearances of each object declared with them."""
         return (
             RECORDED_SIGNALS
             + tuple(signal for frame in self.frames for signal in frame.signals)
@@ -286,6 +314,7 @@ class Scene:
             + tuple(signal for frame in self.frames if frame.into for signal in frame.hole_signals)
             + tuple(signal for frame in self.frames if frame.onto for signal in frame.target_signals)
             + tuple(signal for frame in self.moving_frames for signal in frame.orientation_signals)
+            + tuple(frame.inside_signal for frame in self.frames if frame.inside)
             + tuple(signal for item in self.objects for signal in item.clearance_signals)
         )
 

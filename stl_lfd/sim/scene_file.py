@@ -129,6 +129,7 @@ def parse_scene(data: dict[str, Any], path: Path) -> Scene:
         raise ConfigError(f"{path}: 'frames' must map each frame's name to its pose and objects")
     scene = replace(scene, frames=tuple(_parse_frame(name, item, path, scene) for name, item in frames.items()))
     _check_holes(scene, path)
+    _check_containers(scene, path)
     _check_clearances(scene, path)
     return scene
 
@@ -153,6 +154,24 @@ def _check_holes(scene: Scene, path: Path) -> None:
                 f"{path}: 'frames.{frame.name}.into': the frame's first object, {frame.objects[0]}, must be movable (a mass above 0): it is what goes into the hole"
             )
     _check_targets(scene, path)
+
+
+def _check_containers(scene: Scene, path: Path) -> None:
+    """ConfigError for an `inside` that names no other frame with an `interior`, or whose frame
+    does not start with a movable object."""
+    containers = [frame.name for frame in scene.frames if frame.interior is not None]
+    objects = {item.name: item for item in scene.objects}
+    for frame in scene.frames:
+        if frame.inside is None:
+            continue
+        if frame.inside not in containers or frame.inside == frame.name:
+            raise ConfigError(
+                f"{path}: 'frames.{frame.name}.inside' must name another frame with an 'interior' (got {shown(frame.inside)}; frames with one: {', '.join(containers) or 'none'})"
+            )
+        if objects[frame.objects[0]].mass <= 0:
+            raise ConfigError(
+                f"{path}: 'frames.{frame.name}.inside': the frame's first object, {frame.objects[0]}, must be movable (a mass above 0): it is what is put inside"
+            )
 
 
 def _check_targets(scene: Scene, path: Path) -> None:
@@ -208,7 +227,9 @@ def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
     where = f"frames.{name}"
     if not isinstance(name, str) or not name.isidentifier() or name == BASE_FRAME:
         raise ConfigError(f"{path}: frame name {shown(name)} must be a name (letters, digits, _) other than '{BASE_FRAME}'")
-    check_keys(data, ("position", "yaw", "objects", "area", "symmetry", "rim", "into", "onto"), path, where, required=("position", "objects"))
+    check_keys(
+        data, ("position", "yaw", "objects", "area", "symmetry", "rim", "into", "onto", "interior", "inside"), path, where, required=("position", "objects")
+    )
     pose = parse_pose({key: data[key] for key in ("position", "yaw") if key in data}, path, where)
     objects = data["objects"]
     known = [item.name for item in scene.objects]
@@ -235,7 +256,17 @@ def _parse_frame(name: Any, data: Any, path: Path, scene: Scene) -> SceneFrame:
         raise ConfigError(
             f"{path}: '{where}.onto' must name the frame the object is put on, and a frame goes either into a hole or onto a target (got {shown(onto)})"
         )
-    frame = SceneFrame(name, pose, tuple(str(item) for item in objects), area, symmetry, pose.yaw, rim, into, onto)  # type: ignore[arg-type]
+    interior = None
+    if "interior" in data:
+        box = check_keys(data["interior"], ("lower", "upper"), path, f"{where}.interior", required=("lower", "upper"))
+        low, high = (vector(box[key], 3, path, f"{where}.interior.{key}") for key in ("lower", "upper"))
+        if not all(a < b for a, b in zip(low, high)):
+            raise ConfigError(f"{path}: '{where}.interior' must have lower < upper in x, y and z")
+        interior = (low, high)
+    inside = data.get("inside")
+    if inside is not None and not isinstance(inside, str):
+        raise ConfigError(f"{path}: '{where}.inside' must name the frame whose interior the object is put in (got {shown(inside)})")
+    frame = SceneFrame(name, pose, tuple(str(item) for item in objects), area, symmetry, pose.yaw, rim, into, onto, interior, inside)  # type: ignore[arg-type]
     check_area(frame, pose, str(path))
     return frame
 

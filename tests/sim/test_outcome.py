@@ -90,3 +90,52 @@ def test_onto_must_name_another_frame_and_start_with_a_movable_object(tmp_path):
         (tmp_path / "bad.yaml").write_text(bad)
         with pytest.raises(ConfigError, match=message):
             load_scene(str(tmp_path / "bad.yaml"))
+
+
+INSIDE_SCENE = """description: a box to put in a turned tray
+objects:
+  - {name: table, shape: box, size: [0.25, 0.45, 0.01], position: [0.5, 0.0, 0.01]}
+  - {name: box, shape: box, size: [0.02, 0.02, 0.03], position: [0.45, -0.22, 0.05], mass: 0.1}
+  - {name: tray, shape: box, size: [0.08, 0.10, 0.005], position: [0.55, 0.20, 0.025], orientation: [0, 0, 0.5]}
+frames:
+  box: {position: [0.45, -0.22, 0.05], objects: [box], inside: tray}
+  tray: {position: [0.55, 0.20, 0.03], objects: [tray], interior: {lower: [-0.07, -0.09, 0.0], upper: [0.07, 0.09, 0.05]}}
+"""
+
+
+def test_an_object_put_inside_a_container_records_how_far_inside_it_is(tmp_path):
+    (tmp_path / "inside.yaml").write_text(INSIDE_SCENE)
+    scene = load_scene(str(tmp_path / "inside.yaml"))
+    grasp = np.array([0.45, -0.22, 0.06])  # 1 cm above the box's centre
+    along = np.array([np.cos(0.5), np.sin(0.5), 0.0])  # the tray's x axis, turned 0.5 rad
+    # set down 1 mm above the tray's floor, 4 cm along its x axis: the box (2 cm half width) is then
+    # 1 cm from the wall at x = 0.07, and its top (6 cm tall) 1.1 cm above the interior's top
+    put_down = np.array([0.55, 0.20, 0.03 + 0.001 + 0.03 + 0.01]) + 0.04 * along
+    columns = execute(carry_into_hole(scene, grasp, put_down), scene, "kinematic", rate=100.0).signals.columns
+    assert scene.recorded_signals[-1] == "box_inside"
+    assert columns["box_inside"][-1] == pytest.approx(0.05 - 0.061, abs=1e-9)  # it sticks out of the top by 11 mm
+    assert columns["box_inside"][0] < -0.2  # on the table, far from the tray
+
+
+def test_extents_along_axes_are_exact_at_any_tilt():
+    from stl_lfd.sim.scene import extents_along
+
+    tilted = rotations.from_euler(0.3, -0.2, 1.1)[None]
+    axes = rotations.to_matrix(tilted).swapaxes(-1, -2)  # the object's own axes: its half extents
+    assert extents_along("box", (0.01, 0.02, 0.03), tilted, axes)[0] == pytest.approx([0.01, 0.02, 0.03])
+    assert extents_along("cylinder", (0.01, 0.1), tilted, axes)[0] == pytest.approx([0.01, 0.01, 0.05])
+    diagonal = (axes[:, 0] + axes[:, 2])[:, None] / np.sqrt(2)
+    assert extents_along("cylinder", (0.01, 0.1), tilted, diagonal)[0, 0] == pytest.approx((0.05 + 0.01) / np.sqrt(2))
+    assert extents_along("sphere", (0.02,), tilted, axes)[0] == pytest.approx([0.02] * 3)
+
+
+def test_inside_must_name_a_frame_with_an_interior(tmp_path):
+    from stl_lfd.errors import ConfigError
+
+    for bad, message in (
+        (INSIDE_SCENE.replace("inside: tray", "inside: table"), "'frames.box.inside' must name another frame with an 'interior'"),
+        (INSIDE_SCENE.replace("upper: [0.07, 0.09, 0.05]", "upper: [0.07, -0.1, 0.05]"), "'frames.tray.interior' must have lower < upper"),
+    ):
+        (tmp_path / "bad.yaml").write_text(bad)
+        with pytest.raises(ConfigError, match=message):
+            load_scene(str(tmp_path / "bad.yaml"))
