@@ -1,7 +1,9 @@
 """The scene's objects in a report: the outlines of the objects the task is about (those of the
 scene's frames: the holder and its hole, the rails) and the paths of the objects that move (the
 shaft), in the trajectory views; and the figure of the object signals the spec constrains
-(`shaft_tilt`, `shaft_depth`, `shaft_offset`, ...) with the spec's thresholds drawn on them."""
+(`shaft_tilt`, `shaft_depth`, `shaft_offset`, ...; and expressions of them only, such as an
+object's offset from its target, `abs(box_x - shelf_x)`) with the spec's thresholds drawn on
+them."""
 
 from __future__ import annotations
 
@@ -12,7 +14,8 @@ from matplotlib.patches import Polygon
 import stl_lfd.rotations as rotations
 from stl_lfd.report.run_data import RunData
 from stl_lfd.sim.scene import Scene, SceneObject
-from stl_lfd.stl.thresholds import Threshold
+from stl_lfd.stl import ast
+from stl_lfd.stl.thresholds import Threshold, expression_values
 
 OBJECT_COLOR = "0.35"
 AXES = {"x": 0, "y": 1, "z": 2}
@@ -98,6 +101,21 @@ def constrained_object_signals(run: RunData) -> list[str]:
     return [signal for signal in run.thresholds if signal.startswith(prefixes) and signal in recorded]
 
 
+def constrained_object_expressions(run: RunData) -> list[str]:
+    """The expressions the spec compares with a number that read the scene's frames' signals only
+    (an object's offset from its target: `abs(box_x - shelf_x)`), all recorded."""
+    if run.scene is None:
+        return []
+    prefixes = tuple(f"{frame.name}_" for frame in run.scene.frames)
+    recorded = recorded_signals(run)
+    chosen = []
+    for text, thresholds in run.expression_thresholds.items():
+        names = {node.name for node in ast.post_order(thresholds[0].expression) if type(node) is ast.Signal}
+        if all(name.startswith(prefixes) and name in recorded for name in names):
+            chosen.append(text)
+    return chosen
+
+
 SIGNAL_WORDS = {
     "depth": "how deep {name}'s lowest point is below {target}'s rim (m)",
     "offset": "{name}'s distance from {target} (m)",
@@ -140,17 +158,25 @@ def draw_thresholds(axes, thresholds: list[Threshold]) -> None:
 def object_signals(run: RunData, per_trial) -> Figure | None:
     """One panel per object signal the spec constrains, every trial's curve (`per_trial`, the
     figures' way of drawing them) and the spec's thresholds; None when it constrains none."""
-    signals = constrained_object_signals(run)
-    if not signals:
+    signals, expressions = constrained_object_signals(run), constrained_object_expressions(run)
+    if not signals and not expressions:
         return None
-    figure = Figure(figsize=(9, 2.2 * len(signals) + 0.8), layout="constrained")
-    panels = np.atleast_1d(figure.subplots(len(signals), 1, sharex=True))
+    count = len(signals) + len(expressions)
+    figure = Figure(figsize=(9, 2.2 * count + 0.8), layout="constrained")
+    panels = np.atleast_1d(figure.subplots(count, 1, sharex=True))
     for axes, signal in zip(panels, signals):
         curves = {number: (table.times, table.columns[signal]) for number, table in run.signals.items() if signal in table.columns}
         per_trial(axes, run, curves)
         draw_thresholds(axes, run.thresholds[signal])
         unit = UNITS.get(signal.rsplit("_", 1)[-1], "")
         axes.set_ylabel(f"{signal} ({unit})" if unit else signal, fontsize=9)
+        axes.legend(loc="upper left", bbox_to_anchor=(1, 1), fontsize=8)
+    for axes, text in zip(panels[len(signals) :], expressions):
+        thresholds = run.expression_thresholds[text]
+        curves = {number: (table.times, expression_values(thresholds[0].expression, table.columns)) for number, table in run.signals.items()}
+        per_trial(axes, run, curves)
+        draw_thresholds(axes, thresholds)
+        axes.set_ylabel(text, fontsize=9)
         axes.legend(loc="upper left", bbox_to_anchor=(1, 1), fontsize=8)
     panels[-1].set_xlabel("t (s)")
     figure.suptitle(f"{run.task.name}: the objects' signals the spec constrains, per trial")

@@ -18,7 +18,7 @@ from stl_lfd.signals import SignalTable
 from stl_lfd.sim import Scene, load_scene
 from stl_lfd.stl import ast, load_spec
 from stl_lfd.stl.regions import region_boxes
-from stl_lfd.stl.thresholds import Threshold, signal_thresholds
+from stl_lfd.stl.thresholds import Threshold, expression_thresholds, signal_thresholds
 
 
 class MissingSignalsWarning(UserWarning):
@@ -43,7 +43,8 @@ class RunData:
         trials: finished trials in order; signals: trial number -> recorded signals (0 is the
         unoptimised skill); regions: name -> {signal: (lo, hi)}; constraints: the temporal
         use of each region by the spec; thresholds: signal -> the numbers the spec compares it
-        with; scene: the scene at the run's one placement (as the scene file has it with several);
+        with; expression_thresholds: the same for expressions of signals (`abs(box_x - shelf_x)`,
+        by their text); scene: the scene at the run's one placement (as the scene file has it with several);
         missing_signals: the run's signal files that should be there and are not (a damaged
         run: their trials are left out of the figures).
     """
@@ -59,6 +60,7 @@ class RunData:
     constraints: list[RegionConstraint]
     tracking: RunTrackingRecord | None = None  # tracking.json, when the run learned how its robot tracks
     thresholds: dict[str, list[Threshold]] = field(default_factory=dict)
+    expression_thresholds: dict[str, list[Threshold]] = field(default_factory=dict)
     scene: Scene | None = None
     missing_signals: tuple[str, ...] = ()  # signal files of finished trials that are not there (relative paths)
 
@@ -103,6 +105,7 @@ def load_run(path: Path) -> RunData:
         constraints=region_constraints(spec),
         tracking=read_tracking(path),
         thresholds=signal_thresholds(spec),
+        expression_thresholds=expression_thresholds(spec),
         scene=placed_scene_of(task),
         missing_signals=missing,
     )

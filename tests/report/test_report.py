@@ -176,6 +176,16 @@ def test_a_contact_run_draws_its_objects_and_the_specs_thresholds_on_their_signa
     from stl_lfd.report import objects
 
     assert objects.constrained_object_signals(run) == ["shaft_held", "shaft_speed", "shaft_depth", "shaft_offset", "shaft_tilt"]
+    # an object's offset from its target written as an expression is drawn too; the hand's is not
+    from dataclasses import replace
+
+    from stl_lfd.stl import parse
+    from stl_lfd.stl.thresholds import expression_thresholds
+
+    spec = parse("mine := F G abs(shaft_x - holder_x) < 0.004 & F abs(x - shaft_x) < 0.01\n")
+    offsets = replace(run, expression_thresholds=expression_thresholds(spec))
+    assert objects.constrained_object_expressions(offsets) == ["abs(shaft_x - holder_x)"]
+    assert len(objects.object_signals(offsets, lambda axes, run, curves: None).axes) == 6
     assert {item.name for item in objects.fixed_frame_objects(run)} == {"holder_left", "holder_right", "holder_front", "holder_back"}
 
 

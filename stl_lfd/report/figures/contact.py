@@ -95,13 +95,14 @@ class ObjectSignals(FigureSpec):
     left_out = "the spec compares no recorded signal of the scene's objects (shaft_tilt, shaft_depth, ...) with a number"
 
     def applies(self, run: RunData, options: ReportOptions) -> bool:
-        return bool(objects.constrained_object_signals(run))
+        return bool(objects.constrained_object_signals(run) or objects.constrained_object_expressions(run))
 
     def draw(self, run: RunData, options: ReportOptions) -> Figure:
         return objects.object_signals(run, per_trial)
 
     def caption(self, run: RunData) -> str:
-        shown = "; ".join(objects.signal_in_words(signal, run.scene) for signal in objects.constrained_object_signals(run))
+        words = [objects.signal_in_words(signal, run.scene) for signal in objects.constrained_object_signals(run)]
+        shown = "; ".join(words + objects.constrained_object_expressions(run))
         return (
             f"The signals of the scene's objects that the spec constrains, over time per trial: {numbered_in_words(run)}; dashed green, the spec's "
             f"thresholds. Shown: {shown}."
