@@ -44,18 +44,20 @@ def outline(points: np.ndarray) -> np.ndarray:
 
 
 def fixed_frame_objects(run: RunData) -> list[SceneObject]:
-    """The fixed objects of the scene's frames (what a movable object is put into or taken
-    from), at the run's placement; none when the run has several placements (the recorded
-    signals are the worst placement's, which they do not name)."""
+    """The fixed objects the task is about: those of the scene's frames (what a movable object
+    is put into or taken from) and those with a clearance (the obstacles), at the run's
+    placement; none when the run has several placements (the recorded signals are the worst
+    placement's, which they do not name)."""
     return fixed_objects(run.scene, len(run.task.placements))
 
 
 def fixed_objects(scene: Scene | None, placements: int) -> list[SceneObject]:
-    """The fixed objects of `scene`'s frames, when the run it belongs to has one placement."""
+    """The fixed objects of `scene`'s frames and those with a clearance, when the run it
+    belongs to has one placement."""
     if scene is None or placements > 1:
         return []
     names = {name for frame in scene.frames for name in frame.objects}
-    return [item for item in scene.objects if item.name in names and item.mass == 0]
+    return [item for item in scene.objects if (item.name in names or item.clearance) and item.mass == 0]
 
 
 def draw_objects(axes, run: RunData, across: str, up: str) -> None:

@@ -177,13 +177,11 @@ def test_a_contact_run_draws_its_objects_and_the_specs_thresholds_on_their_signa
 
     assert objects.constrained_object_signals(run) == ["shaft_held", "shaft_speed", "shaft_depth", "shaft_offset", "shaft_tilt"]
     # an object's offset from its target written as an expression is drawn too; the hand's is not
-    from dataclasses import replace
-
     from stl_lfd.stl import parse
     from stl_lfd.stl.thresholds import expression_thresholds
 
     spec = parse("mine := F G abs(shaft_x - holder_x) < 0.004 & F abs(x - shaft_x) < 0.01\n")
-    offsets = replace(run, expression_thresholds=expression_thresholds(spec))
+    offsets = dataclasses.replace(run, expression_thresholds=expression_thresholds(spec))
     assert objects.constrained_object_expressions(offsets) == ["abs(shaft_x - holder_x)"]
     assert len(objects.object_signals(offsets, lambda axes, run, curves: None).axes) == 6
     assert {item.name for item in objects.fixed_frame_objects(run)} == {"holder_left", "holder_right", "holder_front", "holder_back"}
@@ -271,3 +269,16 @@ def test_an_object_signal_is_described_with_the_scenes_own_names(tmp_path):
     assert signal_in_words("box_height", scene) == "box_height, how high box's lowest point is above shelf's origin (m)"
     assert signal_in_words("box_offset", scene) == "box_offset, box's distance from shelf (m)"
     assert signal_in_words("force", scene) == "force"
+
+
+def test_the_objects_drawn_are_the_frames_fixed_objects_and_the_obstacles():
+    from stl_lfd.poses import Pose
+    from stl_lfd.report.objects import fixed_objects
+    from stl_lfd.sim.scene import Scene, SceneFrame, SceneObject
+
+    table = SceneObject("table", "box", (0.25, 0.45, 0.01), (0.5, 0.0, 0.01))
+    post = SceneObject("post", "cylinder", (0.01, 0.1), (0.5, 0.1, 0.05), clearance=("hand",))
+    holder = SceneObject("holder", "box", (0.02, 0.02, 0.02), (0.6, 0.1, 0.02))
+    scene = Scene("s", "a scene", objects=(table, post, holder), frames=(SceneFrame("holder", Pose((0.6, 0.1, 0.04), 0.0), ("holder",)),))
+    assert [item.name for item in fixed_objects(scene, 1)] == ["post", "holder"]
+    assert fixed_objects(scene, 2) == []
