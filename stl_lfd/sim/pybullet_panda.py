@@ -38,6 +38,7 @@ FINGER_JOINTS = [9, 10]
 MOVING_JOINTS = ARM_JOINTS + FINGER_JOINTS  # what the Jacobian, mass matrix and inverse dynamics take
 WRIST_JOINT = 7  # panda_joint8, fixed: the flange (massless panda_link8) carries the hand
 HAND_LINKS = [8, 9, 10, 11]  # the bodies beyond the wrist sensor: hand, fingers, grasp target
+REGION_EDGE = 0.003  # m: how thick a region's edges are drawn
 ZEROS = [0.0] * len(MOVING_JOINTS)
 KEPT_WORLDS = 4  # worlds a backend keeps open (about 0.2 s to build one)
 # The URDF gives the fingers soft contacts (30 kN/m): a 20 N squeeze sinks a held shaft 0.7 mm
@@ -177,9 +178,17 @@ class PandaWorld:
         return self.frames.poses(self.object_poses())
 
     def _add_region(self, region: Region) -> int:
-        lower, upper = np.array(region.lower), np.array(region.upper)
-        visual = self.client.createVisualShape(self.pb.GEOM_BOX, halfExtents=list((upper - lower) / 2), rgbaColor=region.color)
-        return self.client.createMultiBody(baseMass=0, baseCollisionShapeIndex=-1, baseVisualShapeIndex=visual, basePosition=list((upper + lower) / 2))
+        """The region's edges, opaque: TinyRenderer, which draws the videos, draws a translucent
+        box opaque, and would hide what stands inside it."""
+        bars = region.edges(REGION_EDGE)
+        color = [*region.color[:3], 1.0]
+        visual = self.client.createVisualShapeArray(
+            shapeTypes=[self.pb.GEOM_BOX] * len(bars),
+            halfExtents=[list(half) for _, half in bars],
+            visualFramePositions=[list(centre) for centre, _ in bars],
+            rgbaColors=[color] * len(bars),
+        )
+        return self.client.createMultiBody(baseMass=0, baseCollisionShapeIndex=-1, baseVisualShapeIndex=visual, basePosition=[0.0, 0.0, 0.0])
 
     def reset(self, target: Target) -> None:
         """Restore the initial state, then place the hand at rest at `target`'s pose and the

@@ -255,6 +255,23 @@ class Region:
     upper: tuple[float, float, float]
     color: tuple[float, float, float, float] = REGION_COLORS[0]
 
+    def edges(self, thickness: float) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The box's 12 edges as bars `thickness` thick: `(centre, half extents)` each (a
+        wireframe, for renderers that draw a translucent box opaque)."""
+        lower, upper = np.asarray(self.lower, dtype=float), np.asarray(self.upper, dtype=float)
+        middle, half = (lower + upper) / 2, (upper - lower) / 2
+        bars = []
+        for axis in range(3):
+            others = [other for other in range(3) if other != axis]
+            for first in (lower, upper):
+                for second in (lower, upper):
+                    centre = middle.copy()
+                    centre[others[0]], centre[others[1]] = first[others[0]], second[others[1]]
+                    extent = np.full(3, thickness / 2)
+                    extent[axis] = half[axis] + thickness / 2
+                    bars.append((centre, extent))
+        return bars
+
 
 @dataclass(frozen=True)
 class Scene:

@@ -1,5 +1,6 @@
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from stl_lfd.errors import ConfigError
@@ -208,3 +209,21 @@ def test_a_rim_within_its_walls_is_accepted_up_to_their_top_and_bottom(tmp_path)
             assert not accepted, rim
         else:
             assert accepted, rim
+
+
+def test_a_region_is_drawn_as_its_edges_so_that_what_stands_inside_it_shows_in_videos():
+    from stl_lfd.sim.pybullet_panda import PandaWorld
+    from stl_lfd.sim.scene import Camera, Region, Scene, SceneObject
+
+    edges = Region("L", (0.0, 0.0, 0.0), (0.2, 0.4, 0.6)).edges(0.01)
+    assert len(edges) == 12 and sorted({tuple(np.round(2 * half, 3)) for _, half in edges}) == [(0.01, 0.01, 0.61), (0.01, 0.41, 0.01), (0.21, 0.01, 0.01)]
+    box = SceneObject("box", "box", (0.03, 0.03, 0.03), (0.5, 0.2, 0.03), color=(1.0, 0.0, 0.0, 1.0))
+    camera = Camera(target=(0.5, 0.2, 0.05), distance=0.6, yaw=60, pitch=-35, width=160, height=120, fps=24)
+    scene = Scene("s", "a red box in a region", objects=(box,), camera=camera)
+    red = []
+    for regions in ({}, {"L": {"x": (0.4, 0.6), "y": (0.1, 0.3), "z": (0.0, 0.2)}}):
+        world = PandaWorld(scene.with_regions(regions))
+        image = world.render(camera)
+        world.close()
+        red.append(int(((image[..., 0] > 150) & (image[..., 1] < 80) & (image[..., 2] < 80)).sum()))
+    assert red[0] > 100 and red[1] == red[0]  # TinyRenderer draws a translucent box opaque: it hid the box
