@@ -191,7 +191,7 @@ def run_one(problem: str, method: str, seed: int) -> dict:
         "method": method,
         "seed": seed,
         "budget": task.optimizer.trials,
-        "backend": task.backend,
+        "backend": executed.backend,
         "initial_robustness": initial,
         "first_satisfied": satisfied[0] if satisfied else None,
         "best_robustness": max((value for value in robustness if value is not None), default=None),
