@@ -6,8 +6,10 @@ execution as a `Rollout`. The backends live in a registry (`registry.py`: `pybul
 `Capabilities`.
 
     backend.py, registry.py        the protocol, its capabilities; backends found by name
-    recorder.py                    poses, fingers, wrench and objects -> the signal columns
+    steps.py, recorder.py          what a backend observed at each step -> the signal columns
+    clearance.py                   the hand's (and two objects') distances, for those columns
     scene.py, scene_file.py        scenes as data; reading scene files and placements
+    shapes.py                      the geometry of boxes, cylinders and spheres
     impedance.py                   the compliant controller both simulators use
     pybullet_panda.py              a compliant Panda in PyBullet
     mujoco_panda.py, mujoco_model.py   a compliant Panda in MuJoCo, and its model

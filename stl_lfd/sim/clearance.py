@@ -21,6 +21,7 @@ import numpy as np
 
 import stl_lfd.rotations as rotations
 from stl_lfd.sim.scene import HAND
+from stl_lfd.sim.steps import Steps
 
 if TYPE_CHECKING:
     from stl_lfd.sim.scene import Scene, SceneFrame, SceneObject
@@ -46,29 +47,8 @@ def hand_boxes(opening: float) -> list[Box]:
     return [Box(*PALM)] + [Box(np.array([0.0, sign * side, FINGER_CENTRE_Z]), FINGER_HALF) for sign in (1.0, -1.0)]
 
 
-@dataclass(frozen=True)
-class Poses:
-    """What a clearance is measured from at `S` instants.
-
-    Attributes:
-        positions: `S x 3` grasp-target positions (m, base frame).
-        orientations: `S x 4` hand orientations (unit quaternions x, y, z, w).
-        openings: `S` finger openings (m).
-        frame_positions: `S x F x 3` positions of the scene's frames.
-        frame_orientations: `S x F x 4` orientations of the frames' first objects.
-        frame_held: `S x F`: true where the fingers hold the object a frame moves with.
-    """
-
-    positions: np.ndarray
-    orientations: np.ndarray
-    openings: np.ndarray
-    frame_positions: np.ndarray
-    frame_orientations: np.ndarray
-    frame_held: np.ndarray
-
-
-def clearance_columns(steps: Poses, scene: Scene) -> dict[str, np.ndarray]:
-    """At each instant of `steps`: each `clearance` object's signed distance (m) to the hand,
+def clearance_columns(steps: Steps, scene: Scene) -> dict[str, np.ndarray]:
+    """At `steps.times`: each `clearance` object's signed distance (m) to the hand,
     its fingers and what they hold (`NAME_clearance`)."""
     import fcl  # only scenes that declare clearances pay for it
 
@@ -78,8 +58,8 @@ def clearance_columns(steps: Poses, scene: Scene) -> dict[str, np.ndarray]:
     for item in scene.objects:
         for other, signal in zip(item.clearance, item.clearance_signals):
             target = _collision_object(fcl, item)
-            values = np.empty(len(steps.positions))
-            for step in range(len(steps.positions)):
+            values = np.empty(len(steps.times))
+            for step in range(len(steps.times)):
                 _place(fcl, target, *_object_pose(steps, scene, item, step))
                 parts = (
                     _hand_parts(fcl, steps, scene, step, item.name)
@@ -91,7 +71,7 @@ def clearance_columns(steps: Poses, scene: Scene) -> dict[str, np.ndarray]:
     return columns
 
 
-def _hand_parts(fcl, steps: Poses, scene: Scene, step: int, measured: str) -> list:
+def _hand_parts(fcl, steps: Steps, scene: Scene, step: int, measured: str) -> list:
     """The hand's boxes at `step`, and each object the fingers hold but `measured`."""
     held = [
         _placed_object(fcl, item, *_frame_object_pose(steps, scene, frame, index, step))
@@ -101,10 +81,10 @@ def _hand_parts(fcl, steps: Poses, scene: Scene, step: int, measured: str) -> li
     return _hand_objects(fcl, steps, step) + held
 
 
-def _hand_objects(fcl, steps: Poses, step: int) -> list:
+def _hand_objects(fcl, steps: Steps, step: int) -> list:
     rotation = rotations.to_matrix(steps.orientations[step])
     objects = []
-    for box in hand_boxes(float(steps.openings[step])):
+    for box in hand_boxes(float(steps.gripper[step])):
         transform = fcl.Transform(rotation, steps.positions[step] + rotation @ box.centre)
         objects.append(fcl.CollisionObject(fcl.Box(*(2 * box.half)), transform))
     return objects
@@ -132,7 +112,7 @@ def _place(fcl, placed, position: np.ndarray, orientation: np.ndarray) -> None:
     placed.setTransform(fcl.Transform(rotations.to_matrix(orientation), np.asarray(position, dtype=float)))
 
 
-def _object_pose(steps: Poses, scene: Scene, item: SceneObject, step: int) -> tuple[np.ndarray, np.ndarray]:
+def _object_pose(steps: Steps, scene: Scene, item: SceneObject, step: int) -> tuple[np.ndarray, np.ndarray]:
     """Where `item` is at `step`: with the frame it is the carried object of, else where the
     scene puts it (it is fixed: `Scene` checks)."""
     for index, frame in enumerate(scene.frames):
@@ -142,7 +122,7 @@ def _object_pose(steps: Poses, scene: Scene, item: SceneObject, step: int) -> tu
     return np.asarray(item.position, dtype=float), rotations.from_euler(*item.orientation)
 
 
-def _frame_object_pose(steps: Poses, scene: Scene, frame: SceneFrame, index: int, step: int) -> tuple[np.ndarray, np.ndarray]:
+def _frame_object_pose(steps: Steps, scene: Scene, frame: SceneFrame, index: int, step: int) -> tuple[np.ndarray, np.ndarray]:
     """The centre and orientation of the object a frame moves with, at `step`."""
     orientation = steps.frame_orientations[step, index]
     centre = steps.frame_positions[step, index] - rotations.rotate(orientation, scene.origin_in_object(frame))

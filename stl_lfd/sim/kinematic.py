@@ -17,9 +17,10 @@ import stl_lfd.rotations as rotations
 from stl_lfd.signals import SignalTable
 from stl_lfd.sim.backend import BackendBase, Capabilities, Observer
 from stl_lfd.sim.grasp_model import SETTLE_SECONDS, InHand
-from stl_lfd.sim.recorder import Steps, signal_columns
+from stl_lfd.sim.recorder import signal_columns
 from stl_lfd.sim.reference import Reference, Rollout, recording_times
 from stl_lfd.sim.scene import Scene
+from stl_lfd.sim.steps import Steps
 
 
 class KinematicBackend(BackendBase):

@@ -15,8 +15,6 @@ recording times, to `signal_columns`. Either way the columns are built here and 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 import stl_lfd.rotations as rotations
@@ -24,34 +22,11 @@ from stl_lfd.choices import WRENCH_SIGNALS
 from stl_lfd.errors import ExecutionError
 from stl_lfd.rotations import QUATERNION_COLUMNS
 from stl_lfd.signals import SignalTable
-from stl_lfd.sim.clearance import Poses, clearance_columns
+from stl_lfd.sim.clearance import clearance_columns
 from stl_lfd.sim.reference import Reference, Rollout, recording_times
-from stl_lfd.sim.scene import Scene, SceneFrame, extents_along, lowest_heights
-
-
-@dataclass
-class Steps:
-    """What a backend observed at `S` instants.
-
-    Attributes:
-        times: `S` seconds.
-        positions: `S x 3` grasp-target positions (m, base frame).
-        orientations: `S x 4` hand orientations (unit quaternions x, y, z, w).
-        gripper: `S` finger openings (m).
-        wrench: `S x 6` external force (N) and torque (Nm) at the wrist, base frame.
-        frame_positions: `S x F x 3` positions of the scene's frames.
-        frame_orientations: `S x F x 4` orientations of the frames' first objects.
-        frame_held: `S x F`: 1 where both fingers touch the object a frame moves with, else 0.
-    """
-
-    times: np.ndarray
-    positions: np.ndarray
-    orientations: np.ndarray
-    gripper: np.ndarray
-    wrench: np.ndarray
-    frame_positions: np.ndarray
-    frame_orientations: np.ndarray
-    frame_held: np.ndarray
+from stl_lfd.sim.scene import Scene, SceneFrame
+from stl_lfd.sim.shapes import extents_along, lowest_heights
+from stl_lfd.sim.steps import Steps
 
 
 def signal_columns(steps: Steps, scene: Scene, times: np.ndarray) -> dict[str, np.ndarray]:
@@ -92,7 +67,8 @@ def signal_columns(steps: Steps, scene: Scene, times: np.ndarray) -> dict[str, n
         frames = np.stack([at(steps.frame_positions[:, index]) for index in range(len(scene.frames))], axis=1) if scene.frames else steps.frame_positions
         turns = [at(rotations.continuous(steps.frame_orientations[:, index])) for index in range(len(scene.frames))]
         turns_array = np.stack([turn / np.linalg.norm(turn, axis=1, keepdims=True) for turn in turns], axis=1) if turns else steps.frame_orientations
-        columns.update(clearance_columns(Poses(positions, orientations, columns["gripper"], frames, turns_array, np.asarray(held) > 0.5), scene))
+        at_times = Steps(times, positions, orientations, columns["gripper"], wrench, frames, turns_array, np.asarray(held) > 0.5)
+        columns.update(clearance_columns(at_times, scene))
     return {name: columns[name] for name in scene.recorded_signals}  # in the order the scene lists them
 
 

@@ -19,7 +19,8 @@ from stl_lfd.limits import MAX_SYMMETRY, MAX_YAW
 from stl_lfd.poses import BASE_FRAME, Pose, parse_assignment, parse_pose, pose_from_values
 from stl_lfd.sim.impedance import NULLSPACE_POSTURES, PANDA_TORQUE_LIMITS
 from stl_lfd.sim.safety import Safety
-from stl_lfd.sim.scene import HAND, SHAPES, Camera, Control, Scene, SceneFrame, SceneObject, check_area, lowest_heights
+from stl_lfd.sim.scene import HAND, Camera, Control, Scene, SceneFrame, SceneObject, check_area
+from stl_lfd.sim.shapes import SHAPES, lowest_heights
 from stl_lfd.spelling import spelled
 from stl_lfd.yamlfile import check_keys, number, read_yaml, shown, vector
 
@@ -129,65 +130,43 @@ def parse_scene(data: dict[str, Any], path: Path) -> Scene:
         raise ConfigError(f"{path}: 'frames' must map each frame's name to its pose and objects")
     scene = replace(scene, frames=tuple(_parse_frame(name, item, path, scene) for name, item in frames.items()))
     _check_holes(scene, path)
-    _check_containers(scene, path)
+    _check_destinations(scene, path)
     _check_clearances(scene, path)
     return scene
 
 
 def _check_holes(scene: Scene, path: Path) -> None:
-    """ConfigError for a `rim` outside the height of its frame's objects (the hole's walls), an
-    `into` that names no frame with a `rim`, or whose frame does not start with a movable object."""
-    rims = [frame.name for frame in scene.frames if frame.rim is not None]
+    """ConfigError for a `rim` outside the height of its frame's objects (the hole's walls)."""
     objects = {item.name: item for item in scene.objects}
     for frame in scene.frames:
         if frame.rim is not None:
             _check_rim(frame, [objects[name] for name in frame.objects], path)
-    for frame in scene.frames:
-        if frame.into is None:
-            continue
-        if frame.into not in rims or frame.into == frame.name:
-            raise ConfigError(
-                f"{path}: 'frames.{frame.name}.into' must name another frame with a 'rim' (a hole; got {shown(frame.into)}; frames with one: {', '.join(rims) or 'none'})"
-            )
-        if objects[frame.objects[0]].mass <= 0:
-            raise ConfigError(
-                f"{path}: 'frames.{frame.name}.into': the frame's first object, {frame.objects[0]}, must be movable (a mass above 0): it is what goes into the hole"
-            )
-    _check_targets(scene, path)
 
 
-def _check_containers(scene: Scene, path: Path) -> None:
-    """ConfigError for an `inside` that names no other frame with an `interior`, or whose frame
-    does not start with a movable object."""
-    containers = [frame.name for frame in scene.frames if frame.interior is not None]
+# Where a frame's movable object goes: the key, the frames it may name, the words of the error.
+DESTINATIONS = (
+    ("into", lambda frame: frame.rim is not None, "another frame with a 'rim' (a hole; ", "frames with one", "goes into the hole"),
+    ("onto", lambda frame: True, "another frame, the target (", "frames", "is put on the target"),
+    ("inside", lambda frame: frame.interior is not None, "another frame with an 'interior' (", "frames with one", "is put inside"),
+)
+
+
+def _check_destinations(scene: Scene, path: Path) -> None:
+    """ConfigError for an `into`, `onto` or `inside` that names no other frame of the kind it
+    needs, or whose frame does not start with a movable object (what goes there)."""
     objects = {item.name: item for item in scene.objects}
-    for frame in scene.frames:
-        if frame.inside is None:
-            continue
-        if frame.inside not in containers or frame.inside == frame.name:
-            raise ConfigError(
-                f"{path}: 'frames.{frame.name}.inside' must name another frame with an 'interior' (got {shown(frame.inside)}; frames with one: {', '.join(containers) or 'none'})"
-            )
-        if objects[frame.objects[0]].mass <= 0:
-            raise ConfigError(
-                f"{path}: 'frames.{frame.name}.inside': the frame's first object, {frame.objects[0]}, must be movable (a mass above 0): it is what is put inside"
-            )
-
-
-def _check_targets(scene: Scene, path: Path) -> None:
-    """ConfigError for an `onto` that names no other frame, or whose frame does not start with a
-    movable object."""
-    names = [frame.name for frame in scene.frames]
-    objects = {item.name: item for item in scene.objects}
-    for frame in scene.frames:
-        if frame.onto is None:
-            continue
-        if frame.onto not in names or frame.onto == frame.name:
-            raise ConfigError(f"{path}: 'frames.{frame.name}.onto' must name another frame, the target (got {shown(frame.onto)}; frames: {', '.join(names)})")
-        if objects[frame.objects[0]].mass <= 0:
-            raise ConfigError(
-                f"{path}: 'frames.{frame.name}.onto': the frame's first object, {frame.objects[0]}, must be movable (a mass above 0): it is what is put on the target"
-            )
+    for key, fits, wanted, listed, purpose in DESTINATIONS:
+        candidates = [frame.name for frame in scene.frames if fits(frame)]
+        for frame in scene.frames:
+            named = getattr(frame, key)
+            if named is None:
+                continue
+            if named not in candidates or named == frame.name:
+                raise ConfigError(f"{path}: 'frames.{frame.name}.{key}' must name {wanted}got {shown(named)}; {listed}: {', '.join(candidates) or 'none'})")
+            if objects[frame.objects[0]].mass <= 0:
+                raise ConfigError(
+                    f"{path}: 'frames.{frame.name}.{key}': the frame's first object, {frame.objects[0]}, must be movable (a mass above 0): it is what {purpose}"
+                )
 
 
 def _check_clearances(scene: Scene, path: Path) -> None:

@@ -11,8 +11,9 @@ import stl_lfd.rotations as rotations
 from stl_lfd.errors import ConfigError
 from stl_lfd.poses import Pose
 from stl_lfd.sim import load_scene
-from stl_lfd.sim.clearance import FINGER_CENTRE_Z, FINGER_HALF, Poses, clearance_columns
+from stl_lfd.sim.clearance import FINGER_CENTRE_Z, FINGER_HALF, clearance_columns
 from stl_lfd.sim.scene import Scene, SceneFrame, SceneObject
+from stl_lfd.sim.steps import Steps
 
 FINGERTIP = FINGER_CENTRE_Z + FINGER_HALF[2]  # m: how far the fingertips reach past the grasp target (7.2 mm)
 
@@ -21,7 +22,8 @@ def steps_at(positions, opening=0.08, orientation=rotations.DOWN, frames=((), ()
     positions = np.asarray(positions, dtype=float)
     count = len(positions)
     frame_positions, frame_orientations, held = (np.asarray(values, dtype=float).reshape(count, -1, size) for values, size in zip(frames, (3, 4, 1)))
-    return Poses(positions, np.tile(orientation, (count, 1)), np.full(count, opening), frame_positions, frame_orientations, held[..., 0] > 0.5)
+    orientations, openings = np.tile(orientation, (count, 1)), np.full(count, opening)
+    return Steps(np.arange(count) * 0.01, positions, orientations, openings, np.zeros((count, 6)), frame_positions, frame_orientations, held[..., 0] > 0.5)
 
 
 def scene_with(*objects, frames=()):

@@ -144,7 +144,7 @@ def test_a_grasp_with_nothing_in_reach_fails_the_rollout(engine):
     ],
 )
 def test_distance_to_shapes(shape, size, point, distance):
-    from stl_lfd.sim.scene import distance_to_shape
+    from stl_lfd.sim.shapes import distance_to_shape
 
     assert distance_to_shape(shape, size, np.array(point)) == pytest.approx(distance)
 

@@ -8,7 +8,7 @@ import pytest
 
 import stl_lfd.rotations as rotations
 from stl_lfd.sim import Reference, execute, load_scene
-from stl_lfd.sim.scene import lowest_heights
+from stl_lfd.sim.shapes import lowest_heights
 
 UPRIGHT = np.array([[0.0, 0.0, 0.0, 1.0]])
 LYING = rotations.from_euler(math.pi / 2, 0.0, 0.0)[None]
@@ -118,7 +118,7 @@ def test_an_object_put_inside_a_container_records_how_far_inside_it_is(tmp_path)
 
 
 def test_extents_along_axes_are_exact_at_any_tilt():
-    from stl_lfd.sim.scene import extents_along
+    from stl_lfd.sim.shapes import extents_along
 
     tilted = rotations.from_euler(0.3, -0.2, 1.1)[None]
     axes = rotations.to_matrix(tilted).swapaxes(-1, -2)  # the object's own axes: its half extents
